@@ -1,0 +1,269 @@
+/* hocad: valid high-order triangle surface meshes on CAD models.
+ *
+ * Copyright (C) 2026 the hocad developers.
+ * SPDX-License-Identifier: GPL-2.0-or-later
+ *
+ * The public interface. Every function that can fail returns a hoc_status;
+ * on failure a one-line message is available from hoc_last_error() (it is
+ * per thread and valid until the next failing call on that thread). The
+ * library never prints, never exits and never aborts.
+ *
+ * Objects are opaque handles with explicit create/destroy. Destroy functions
+ * accept NULL and clear the caller's pointer. A hoc_mesh borrows its
+ * hoc_model: destroy every mesh before its model.
+ *
+ * The CAD kernel (gmsh) has one global model: only one hoc_model opened from
+ * a file may exist at a time.
+ */
+#ifndef HOCAD_H
+#define HOCAD_H
+
+#include <stddef.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define HOCAD_VERSION_MAJOR 0
+#define HOCAD_VERSION_MINOR 1
+#define HOCAD_VERSION_PATCH 0
+
+/** Highest element order the library builds and measures. */
+#define HOC_MAX_ORDER 15
+
+typedef enum hoc_status {
+  HOC_OK = 0,
+  HOC_ERR_ARGUMENT = 1,    /**< an argument is out of range, NaN, or NULL */
+  HOC_ERR_IO = 2,          /**< a file cannot be opened, read or written */
+  HOC_ERR_FORMAT = 3,      /**< a file's content is malformed or not the expected format */
+  HOC_ERR_CAD = 4,         /**< the CAD kernel failed, or the model is unusable (e.g. no faces) */
+  HOC_ERR_MESH = 5,        /**< linear meshing failed */
+  HOC_ERR_MISMATCH = 6,    /**< a mesh does not match the model */
+  HOC_ERR_MEMORY = 7,      /**< out of memory */
+  HOC_ERR_INTERRUPTED = 8, /**< cancelled through the progress callback */
+  HOC_ERR_UNSUPPORTED = 9, /**< a valid request the library cannot do (e.g. MSH order > 10) */
+  HOC_ERR_INTERNAL = 10    /**< a bug: please report it */
+} hoc_status;
+
+/** Message of the last failure on the calling thread ("" if none). */
+const char *hoc_last_error(void);
+
+/** Short name of a status ("ok", "invalid argument", ...). */
+const char *hoc_status_string(hoc_status status);
+
+/** Library version, "MAJOR.MINOR.PATCH". */
+const char *hoc_version(void);
+
+/** Reference node distribution inside each element. */
+typedef enum hoc_nodeset {
+  HOC_NODES_EQUISPACED = 0, /**< equispaced lattice, gmsh's and VTK's own */
+  HOC_NODES_FEKETE = 1,     /**< Fekete points (maximal Vandermonde determinant) */
+  HOC_NODES_WARP_BLEND = 2  /**< Warburton's warp & blend points */
+} hoc_nodeset;
+
+/** Jacobian-based distortion measure eta of the seed's Table 1 (d = 2). */
+typedef enum hoc_measure {
+  HOC_MEASURE_SHAPE = 0, /**< eta = |S|^2 / (2 sigma) */
+  HOC_MEASURE_ODDY = 1   /**< eta = (3/2) sigma^-2 (|S^T S|^2 - |S|^4 / 3) */
+} hoc_measure;
+
+/** Progress report: stage name and fraction in [0, 1]. Return nonzero to
+ *  cancel the running operation, which then fails with HOC_ERR_INTERRUPTED
+ *  and leaves no partial output behind. */
+typedef int (*hoc_progress_fn)(void *user, const char *stage, double fraction);
+
+/* ------------------------------------------------------------------------ */
+/* CAD models                                                               */
+
+typedef struct hoc_model hoc_model;
+
+/** Open a CAD model (STEP .step/.stp, IGES .igs/.iges, OpenCASCADE .brep).
+ *  @param[in]  path   file name; the format is chosen by its extension
+ *  @param[out] model  new model on success, NULL on failure
+ *  Fails with HOC_ERR_IO if the file cannot be read, HOC_ERR_CAD if it holds
+ *  no usable face. */
+hoc_status hoc_model_open(const char *path, hoc_model **model);
+
+/** Destroy a model (NULL allowed); clears *model. */
+void hoc_model_destroy(hoc_model **model);
+
+/** Number of CAD faces, curves and vertices. */
+int hoc_model_num_faces(const hoc_model *model);
+int hoc_model_num_curves(const hoc_model *model);
+int hoc_model_num_vertices(const hoc_model *model);
+
+/** Axis-aligned bounding box [xmin, ymin, zmin, xmax, ymax, zmax]. */
+void hoc_model_bbox(const hoc_model *model, double bbox[6]);
+
+/* ------------------------------------------------------------------------ */
+/* Meshes                                                                   */
+
+typedef struct hoc_mesh hoc_mesh;
+
+/** Options of the linear surface mesher. Zero means "choose". */
+typedef struct hoc_linear_options {
+  double size_max;  /**< maximum edge length (0: bounding-box diagonal / 20) */
+  double size_min;  /**< minimum edge length (0: size_max / 50) */
+  double curvature; /**< elements per 2 pi of curvature radius (0: from the order) */
+  int order;        /**< order the mesh will be raised to, used for the default curvature */
+  hoc_progress_fn progress;
+  void *progress_user;
+} hoc_linear_options;
+
+/** Fill options with defaults (all "choose", order 1, no progress). */
+void hoc_linear_options_default(hoc_linear_options *options);
+
+/** Mesh every face of the model with linear triangles. Faces the kernel
+ *  cannot mesh are skipped and counted in hoc_mesh_num_failed_faces().
+ *  @param[in]  model    the CAD model; it must outlive the mesh
+ *  @param[in]  options  NULL for defaults
+ *  @param[out] mesh     new order-1 mesh */
+hoc_status hoc_mesh_generate_linear(hoc_model *model, const hoc_linear_options *options,
+                                    hoc_mesh **mesh);
+
+/** Raise (or lower) a mesh to order p (1..HOC_MAX_ORDER): the new nodes of
+ *  each element are placed in the face's parametric space by evaluating the
+ *  element's parametric map at the reference nodes of the requested
+ *  distribution, and mapped onto the surface; nodes on CAD curves are placed
+ *  in the curve's parameter. From a linear mesh this is the seed's step 2
+ *  (elements straight in (u,v), curve edges following the curves).
+ *  @param[in]  mesh     any mesh on the model
+ *  @param[in]  order    target order p
+ *  @param[in]  nodeset  reference node distribution
+ *  @param[out] out      new mesh of order p */
+hoc_status hoc_mesh_elevate(const hoc_mesh *mesh, int order, hoc_nodeset nodeset,
+                            hoc_mesh **out);
+
+/** Read a gmsh MSH 4.1 mesh (ASCII or binary) of the model's surfaces,
+ *  e.g. one written by gmsh or by hoc_mesh_write_msh. Triangles of any order
+ *  up to 10 are read; other elements are ignored. Nodes without parametric
+ *  coordinates in the file are located on their CAD entity.
+ *  @param[in]  model  the model the mesh was made on
+ *  @param[in]  path   .msh file
+ *  @param[out] mesh   new mesh (equispaced node set)
+ *  Fails with HOC_ERR_MISMATCH if the mesh does not lie on the model. */
+hoc_status hoc_mesh_read_msh(hoc_model *model, const char *path, hoc_mesh **mesh);
+
+/** Write a gmsh MSH 4.1 ASCII file: high-order triangles (gmsh node
+ *  ordering, equispaced nodes) with every node on its CAD entity and its
+ *  parametric coordinates. The file is written to a temporary name and
+ *  renamed on success. Orders above 10 have no MSH element type
+ *  (HOC_ERR_UNSUPPORTED). */
+hoc_status hoc_mesh_write_msh(const hoc_mesh *mesh, const char *path);
+
+/** Write a VTK XML unstructured grid (.vtu) of Lagrange triangles with cell
+ *  data "quality" (q, 0 if tangled), "tangled" (0/1) and "face" (CAD tag).
+ *  @param[in] quality  per-element q, or NULL to compute it with the shape measure */
+hoc_status hoc_mesh_write_vtu(const hoc_mesh *mesh, const double *quality, const char *path);
+
+/** Destroy a mesh (NULL allowed); clears *mesh. */
+void hoc_mesh_destroy(hoc_mesh **mesh);
+
+size_t hoc_mesh_num_elements(const hoc_mesh *mesh);
+size_t hoc_mesh_num_nodes(const hoc_mesh *mesh);
+int hoc_mesh_order(const hoc_mesh *mesh);
+hoc_nodeset hoc_mesh_nodeset(const hoc_mesh *mesh);
+/** Number of faces the linear mesher could not mesh. */
+int hoc_mesh_num_failed_faces(const hoc_mesh *mesh);
+/** Largest distance from a node to its CAD entity, recomputed from the
+ *  nodes' parametric coordinates (a self-check of the mesh). */
+hoc_status hoc_mesh_max_cad_distance(const hoc_mesh *mesh, double *distance);
+
+/* ------------------------------------------------------------------------ */
+/* Quality                                                                  */
+
+/** Statistics of q = 1/eta over a mesh (the seed's Table 2). */
+typedef struct hoc_quality_stats {
+  size_t elements; /**< number of elements */
+  int order;       /**< element order */
+  double min, max, mean, std; /**< of q over the elements (tangled count as 0) */
+  size_t tangled;  /**< elements with det <= 0 at a quadrature point or node */
+  double seconds;  /**< wall time of the measurement */
+} hoc_quality_stats;
+
+/** Measure every element with Definition 2 of the seed (surface high-order
+ *  distortion through the tangent-plane embedding T).
+ *  @param[in]  mesh     the mesh
+ *  @param[in]  measure  shape or Oddy
+ *  @param[out] quality  per-element q in element order, or NULL
+ *  @param[out] tangled  per-element flag (1 = tangled), or NULL
+ *  @param[out] stats    statistics, or NULL */
+hoc_status hoc_mesh_measure(const hoc_mesh *mesh, hoc_measure measure, double *quality,
+                            unsigned char *tangled, hoc_quality_stats *stats);
+
+/** CAD face tag of element e (0-based), or -1 if out of range. */
+int hoc_mesh_element_face_tag(const hoc_mesh *mesh, size_t e);
+
+/* ------------------------------------------------------------------------ */
+/* Untangling and smoothing                                                 */
+
+/** One iteration (a sweep over the free nodes) of the optimiser. */
+typedef struct hoc_optimize_iteration {
+  int iteration;      /**< 1, 2, ... */
+  double objective;   /**< f = sum over elements of int (eta - 1)^2 (regularised while tangled) */
+  double min_q;       /**< smallest q */
+  size_t tangled;     /**< tangled elements */
+  size_t moved;       /**< nodes moved in this sweep */
+  double seconds;     /**< since the start */
+} hoc_optimize_iteration;
+
+/** Called after each iteration; return nonzero to stop (HOC_ERR_INTERRUPTED). */
+typedef int (*hoc_optimize_progress_fn)(void *user, const hoc_optimize_iteration *it);
+
+typedef struct hoc_optimize_options {
+  hoc_measure measure;  /**< distortion measure (default shape) */
+  int fix_curves;       /**< 1: nodes on CAD curves stay where they are (the seed's choice) */
+  int max_iterations;   /**< sweeps (0: 100) */
+  double tolerance;     /**< stop when a sweep lowers f by less than this fraction (0: 1e-4) */
+  hoc_optimize_progress_fn progress;
+  void *progress_user;
+} hoc_optimize_options;
+
+void hoc_optimize_options_default(hoc_optimize_options *options);
+
+typedef struct hoc_optimize_result {
+  int iterations;
+  int converged;        /**< the tolerance was met with no tangled element */
+  double objective_initial, objective_final;
+  size_t tangled_initial, tangled_final;
+  size_t free_nodes;    /**< nodes the optimiser could move */
+  double seconds;
+} hoc_optimize_result;
+
+/** Untangle and smooth at once (the seed's Section 4): minimise
+ *  f = sum_e int_{t_I} (eta - 1)^2 over the parametric coordinates of the
+ *  free nodes, with the regularised determinant of Escobar et al. while an
+ *  element is tangled. Face-interior nodes move in their face's (u, v),
+ *  nodes on CAD curves slide along the curve in t (unless fix_curves), CAD
+ *  vertices are fixed; every position is evaluated on the CAD. A step never
+ *  tangles a valid element and never leaves a face's parametric domain.
+ *  Deterministic, whatever the thread count.
+ *  @param[in,out] mesh  the mesh, changed in place (the best state reached)
+ *  @param[in] options   NULL for defaults
+ *  @param[out] result   may be NULL */
+hoc_status hoc_mesh_optimize(hoc_mesh *mesh, const hoc_optimize_options *options,
+                             hoc_optimize_result *result);
+
+/** Compare the analytic gradient of f with respect to the free parametric
+ *  coordinates (chain rule through the CAD parametrisation) with central
+ *  finite differences, at up to `samples` nodes spread over the mesh.
+ *  @param[out] max_rel_error  largest |analytic - fd| / (|fd| + scale) */
+hoc_status hoc_mesh_check_gradient(hoc_mesh *mesh, hoc_measure measure, int fix_curves,
+                                   int samples, double *max_rel_error);
+
+/* ------------------------------------------------------------------------ */
+/* Files                                                                    */
+
+/** Write `size` bytes to `path` atomically (temporary file in the same
+ *  directory, then rename): the target is either the old file or the new. */
+hoc_status hoc_write_file_atomic(const char *path, const void *data, size_t size);
+
+/** From a signal handler: remove every temporary output file the library
+ *  has open (async-signal-safe), so an interrupted run leaves the previous
+ *  outputs intact and no partial file behind. */
+void hoc_abort_outputs_from_signal(void);
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* HOCAD_H */

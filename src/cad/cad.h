@@ -1,0 +1,144 @@
+/* The CAD interface: what the mesh, the measure and the optimiser may ask of
+ * a CAD model. Backends: gmsh (cad_gmsh.c) and exact analytic surfaces for
+ * tests (cad_analytic.c).
+ * SPDX-License-Identifier: GPL-2.0-or-later
+ *
+ * Entities are addressed by index (0..n-1); `tag` is the kernel's own number,
+ * used only in files and messages.
+ *
+ * Parameters: a face is phi(u, v), a curve is c(t). On a face closed in a
+ * direction (a periodic seam), `period` is its period and callers may pass
+ * unwrapped parameters outside [min, max]: hoc_cad_face_eval wraps them back
+ * before asking the backend, so backends only see parameters in range.
+ */
+#ifndef HOC_CAD_H
+#define HOC_CAD_H
+
+#include "core/error.h"
+
+typedef struct hoc_cad_face {
+  int tag;
+  double lo[2], hi[2];   /* parametric bounds (u, v) */
+  double period[2];      /* period of u and v where the face closes on itself, else 0 */
+  unsigned char pole[4]; /* degenerate side: u = lo[0], u = hi[0], v = lo[1], v = hi[1] */
+  char type[40];         /* kernel's surface type ("Plane", "BSpline surface", ...) */
+  char name[64];         /* kernel's entity name, may be empty */
+  double bbox[6];
+  int *curves, n_curves; /* boundary curve tags, signed by orientation (for files) */
+} hoc_cad_face;
+
+typedef struct hoc_cad_curve {
+  int tag;
+  double lo, hi;         /* parameter bounds */
+  double period;         /* hi - lo if the curve is closed, else 0 */
+  int v0, v1;            /* start and end vertex index, -1 if none */
+  int degenerate;        /* collapses to a point (pole) */
+  double bbox[6];
+} hoc_cad_curve;
+
+typedef struct hoc_cad_vertex {
+  int tag;
+  double xyz[3];
+} hoc_cad_vertex;
+
+typedef struct hoc_cad_ops {
+  /** Position and first derivatives of face f at n points uv[n][2] (in range).
+   *  xyz[n][3], du[n][3], dv[n][3]; any output may be NULL. */
+  hoc_status (*face_eval)(void *ctx, const hoc_cad_face *f, size_t n, const double *uv,
+                          double *xyz, double *du, double *dv);
+  /** Position and derivative of curve c at n parameters t[n]: xyz[n][3], dt[n][3]. */
+  hoc_status (*curve_eval)(void *ctx, const hoc_cad_curve *c, size_t n, const double *t,
+                           double *xyz, double *dt);
+  /** Parameters uv[n][2] on face f of the points c(t[k]) of a boundary curve. */
+  hoc_status (*curve_to_face)(void *ctx, const hoc_cad_curve *c, const hoc_cad_face *f,
+                              size_t n, const double *t, double *uv);
+  /** Parameters uv[2] on face f of a vertex of its boundary. */
+  hoc_status (*vertex_to_face)(void *ctx, const hoc_cad_vertex *v, const hoc_cad_face *f,
+                               double *uv);
+  /** Slow inverse without initial guess: parameters uv[n][2] of the points of
+   *  face f closest to xyz[n][3]. */
+  hoc_status (*face_project)(void *ctx, const hoc_cad_face *f, size_t n, const double *xyz,
+                             double *uv);
+  /** Slow inverse on a curve: t[n] of the points closest to xyz[n][3]. */
+  hoc_status (*curve_project)(void *ctx, const hoc_cad_curve *c, size_t n, const double *xyz,
+                              double *t);
+  void (*destroy)(void *ctx);
+} hoc_cad_ops;
+
+/** A CAD model: the public hoc_model. */
+struct hoc_model {
+  const hoc_cad_ops *ops;
+  void *ctx;
+  int thread_safe; /* backend calls may run concurrently */
+  int is_gmsh;     /* the global gmsh model belongs to this object */
+  int n_faces, n_curves, n_vertices;
+  hoc_cad_face *faces;
+  hoc_cad_curve *curves;
+  hoc_cad_vertex *vertices;
+  /* tag -> index, -1 where no entity has the tag */
+  int *face_of_tag, *curve_of_tag, *vertex_of_tag;
+  int max_face_tag, max_curve_tag, max_vertex_tag;
+  double bbox[6];
+  double diagonal; /* bounding-box diagonal: the model's length scale */
+};
+
+/** Allocate an empty model with room for the entities; the backend fills
+ *  them and then calls hoc_cad_finish. */
+hoc_status hoc_cad_create(int n_faces, int n_curves, int n_vertices, hoc_model **model);
+
+/** Build the tag lookups, the bounding box and detect closed directions and
+ *  poles of each face numerically (if not set by the backend). */
+hoc_status hoc_cad_finish(hoc_model *model);
+
+/** Index of the entity with a tag, or -1. */
+int hoc_cad_face_index(const hoc_model *model, int tag);
+int hoc_cad_curve_index(const hoc_model *model, int tag);
+int hoc_cad_vertex_index(const hoc_model *model, int tag);
+
+/** Face evaluation with unwrapped parameters (wrapped into range first).
+ *  Thread-safe when model->thread_safe; otherwise call from one thread. */
+hoc_status hoc_cad_face_eval(const hoc_model *model, int face, size_t n, const double *uv,
+                             double *xyz, double *du, double *dv);
+/** Curve evaluation; t outside [lo, hi] is wrapped on closed curves. */
+hoc_status hoc_cad_curve_eval(const hoc_model *model, int curve, size_t n, const double *t,
+                              double *xyz, double *dt);
+hoc_status hoc_cad_curve_to_face(const hoc_model *model, int curve, int face, size_t n,
+                                 const double *t, double *uv);
+hoc_status hoc_cad_vertex_to_face(const hoc_model *model, int vertex, int face, double *uv);
+
+/** Invert the face parametrisation near a guess: uv (in: guess, out: result)
+ *  minimises |phi(uv) - xyz| by damped Gauss-Newton steps, staying on the
+ *  same unwrapped copy as the guess. Sets *dist to the final distance.
+ *  Never fails on convergence; the caller judges dist. */
+hoc_status hoc_cad_face_invert(const hoc_model *model, int face, const double xyz[3],
+                               double uv[2], double *dist);
+/** Same on a curve: t in/out. */
+hoc_status hoc_cad_curve_invert(const hoc_model *model, int curve, const double xyz[3],
+                                double *t, double *dist);
+
+/** Wrap a face parameter pair into range along its closed directions. */
+void hoc_cad_face_wrap(const hoc_cad_face *f, double uv[2]);
+
+/** Shift uv by whole periods of f so that it is nearest to ref. */
+void hoc_cad_face_unwrap_near(const hoc_cad_face *f, const double ref[2], double uv[2]);
+
+/* Backends ---------------------------------------------------------------- */
+
+/** Open a CAD file through gmsh (one such model at a time). */
+hoc_status hoc_cad_open_gmsh(const char *path, hoc_model **model);
+
+/** Linear triangulation of the current gmsh model: see mesh/linear_gmsh.c. */
+
+/** Analytic surfaces with exact evaluation (tests): one face each. */
+typedef enum hoc_analytic_kind {
+  HOC_ANALYTIC_PLANE,    /* phi(u,v) = (u, v, 0) on [0,1]^2 scaled by a */
+  HOC_ANALYTIC_SPHERE,   /* radius a: phi = a (cos v cos u, cos v sin u, sin v), u in [0,2pi], v in [-pi/2,pi/2] */
+  HOC_ANALYTIC_CYLINDER, /* radius a, height b: phi = (a cos u, a sin u, v), u in [0,2pi], v in [0,b] */
+  HOC_ANALYTIC_TORUS     /* radii a > b: phi = ((a + b cos v) cos u, (a + b cos v) sin u, b sin v) */
+} hoc_analytic_kind;
+
+/** One analytic face (tag 1) with its seam/pole curves and vertices, thread-safe. */
+hoc_status hoc_cad_create_analytic(hoc_analytic_kind kind, double a, double b,
+                                   hoc_model **model);
+
+#endif

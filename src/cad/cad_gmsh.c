@@ -1,0 +1,450 @@
+/* The gmsh CAD backend (OpenCASCADE inside): import, evaluation,
+ * reparametrisation and projection through gmsh's C API.
+ * SPDX-License-Identifier: GPL-2.0-or-later
+ *
+ * gmsh keeps one global model; this backend owns it while a hoc_model from
+ * it exists. gmsh and OpenCASCADE print on the process's stdout/stderr on
+ * their own (General.Terminal only silences gmsh's logger): calls that may
+ * print run with both descriptors redirected to a scratch file, whose first
+ * error line goes into our message instead.
+ */
+#include "cad/cad.h"
+#include "cad/gmsh_util.h"
+
+#include <gmshc.h>
+
+#include <ctype.h>
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+static int gmsh_initialized;
+static int gmsh_model_in_use;
+
+hoc_status hoc_gmsh_error(const char *what) {
+  char *msg = NULL;
+  int ierr = 0;
+  gmshLoggerGetLastError(&msg, &ierr);
+  hoc_status st;
+  if (!ierr && msg && msg[0])
+    st = HOC_ERROR(HOC_ERR_CAD, "%s: %s", what, msg);
+  else
+    st = HOC_ERROR(HOC_ERR_CAD, "%s failed in gmsh", what);
+  gmshFree(msg);
+  return st;
+}
+
+hoc_status hoc_gmsh_start(void) {
+  if (gmsh_initialized) return HOC_OK;
+  int ierr = 0;
+  gmshInitialize(0, NULL, 0, &ierr);
+  HOC_CHECK(!ierr, HOC_ERR_CAD, "gmsh could not be initialised");
+  gmshOptionSetNumber("General.Terminal", 0, &ierr);
+  gmshOptionSetNumber("General.Verbosity", 1, &ierr);
+  gmsh_initialized = 1;
+  return HOC_OK;
+}
+
+/* Redirection of stdout/stderr around chatty kernel calls. */
+hoc_status hoc_quiet_begin(hoc_quiet *q) {
+  q->sink = tmpfile();
+  q->saved_out = q->saved_err = -1;
+  if (!q->sink) return HOC_OK; /* cannot redirect: the kernel may print, nothing worse */
+  fflush(stdout);
+  fflush(stderr);
+  q->saved_out = dup(STDOUT_FILENO);
+  q->saved_err = dup(STDERR_FILENO);
+  int fd = fileno(q->sink);
+  if (q->saved_out >= 0) dup2(fd, STDOUT_FILENO);
+  if (q->saved_err >= 0) dup2(fd, STDERR_FILENO);
+  return HOC_OK;
+}
+
+void hoc_quiet_end(hoc_quiet *q, char *first_error, size_t size) {
+  if (first_error && size) first_error[0] = '\0';
+  if (!q->sink) return;
+  fflush(stdout);
+  fflush(stderr);
+  if (q->saved_out >= 0) {
+    dup2(q->saved_out, STDOUT_FILENO);
+    close(q->saved_out);
+  }
+  if (q->saved_err >= 0) {
+    dup2(q->saved_err, STDERR_FILENO);
+    close(q->saved_err);
+  }
+  if (first_error && size) {
+    char line[512];
+    rewind(q->sink);
+    while (fgets(line, sizeof line, q->sink)) {
+      if (strstr(line, "ERR") || strstr(line, "rror")) {
+        /* strip terminal colour codes and the "****" decoration */
+        size_t k = 0;
+        for (const char *c = line; *c && k + 1 < size; ++c) {
+          if (*c == '\033') {
+            while (*c && *c != 'm') ++c;
+            if (!*c) break;
+            continue;
+          }
+          if (*c == '*' || *c == '\n' || *c == '\r') continue;
+          first_error[k++] = *c;
+        }
+        first_error[k] = '\0';
+        while (k && isspace((unsigned char)first_error[k - 1])) first_error[--k] = '\0';
+        char *s = first_error;
+        while (isspace((unsigned char)*s)) ++s;
+        memmove(first_error, s, strlen(s) + 1);
+        break;
+      }
+    }
+  }
+  fclose(q->sink);
+  q->sink = NULL;
+}
+
+/* Backend operations ----------------------------------------------------- */
+
+static hoc_status gmsh_face_eval(void *ctx, const hoc_cad_face *f, size_t n, const double *uv,
+                                 double *xyz, double *du, double *dv) {
+  (void)ctx;
+  int ierr = 0;
+  if (!n) return HOC_OK;
+  if (xyz) {
+    double *x = NULL;
+    size_t nx = 0;
+    gmshModelGetValue(2, f->tag, (double *)uv, 2 * n, &x, &nx, &ierr);
+    if (ierr || nx != 3 * n) {
+      gmshFree(x);
+      return hoc_gmsh_error("surface evaluation");
+    }
+    memcpy(xyz, x, 3 * n * sizeof *x);
+    gmshFree(x);
+  }
+  if (du || dv) {
+    double *d = NULL;
+    size_t nd = 0;
+    gmshModelGetDerivative(2, f->tag, (double *)uv, 2 * n, &d, &nd, &ierr);
+    if (ierr || nd != 6 * n) {
+      gmshFree(d);
+      return hoc_gmsh_error("surface derivative");
+    }
+    for (size_t i = 0; i < n; ++i)
+      for (int k = 0; k < 3; ++k) {
+        if (du) du[3 * i + k] = d[6 * i + k];
+        if (dv) dv[3 * i + k] = d[6 * i + 3 + k];
+      }
+    gmshFree(d);
+  }
+  return HOC_OK;
+}
+
+static hoc_status gmsh_curve_eval(void *ctx, const hoc_cad_curve *c, size_t n, const double *t,
+                                  double *xyz, double *dt) {
+  (void)ctx;
+  int ierr = 0;
+  if (!n) return HOC_OK;
+  if (xyz) {
+    double *x = NULL;
+    size_t nx = 0;
+    gmshModelGetValue(1, c->tag, (double *)t, n, &x, &nx, &ierr);
+    if (ierr || nx != 3 * n) {
+      gmshFree(x);
+      return hoc_gmsh_error("curve evaluation");
+    }
+    memcpy(xyz, x, 3 * n * sizeof *x);
+    gmshFree(x);
+  }
+  if (dt) {
+    double *d = NULL;
+    size_t nd = 0;
+    gmshModelGetDerivative(1, c->tag, (double *)t, n, &d, &nd, &ierr);
+    if (ierr || nd != 3 * n) {
+      gmshFree(d);
+      return hoc_gmsh_error("curve derivative");
+    }
+    memcpy(dt, d, 3 * n * sizeof *d);
+    gmshFree(d);
+  }
+  return HOC_OK;
+}
+
+static hoc_status gmsh_curve_to_face(void *ctx, const hoc_cad_curve *c, const hoc_cad_face *f,
+                                     size_t n, const double *t, double *uv) {
+  (void)ctx;
+  if (!n) return HOC_OK;
+  int ierr = 0;
+  double *p = NULL;
+  size_t np = 0;
+  gmshModelReparametrizeOnSurface(1, c->tag, (double *)t, n, f->tag, &p, &np, 0, &ierr);
+  if (ierr || np != 2 * n) {
+    gmshFree(p);
+    return hoc_gmsh_error("curve reparametrisation on a surface");
+  }
+  memcpy(uv, p, 2 * n * sizeof *p);
+  gmshFree(p);
+  return HOC_OK;
+}
+
+static hoc_status gmsh_vertex_to_face(void *ctx, const hoc_cad_vertex *v, const hoc_cad_face *f,
+                                      double *uv) {
+  (void)ctx;
+  int ierr = 0;
+  double *p = NULL;
+  size_t np = 0;
+  gmshModelReparametrizeOnSurface(0, v->tag, NULL, 0, f->tag, &p, &np, 0, &ierr);
+  if (ierr || np != 2) {
+    gmshFree(p);
+    return hoc_gmsh_error("vertex reparametrisation on a surface");
+  }
+  uv[0] = p[0];
+  uv[1] = p[1];
+  gmshFree(p);
+  return HOC_OK;
+}
+
+static hoc_status gmsh_face_project(void *ctx, const hoc_cad_face *f, size_t n,
+                                    const double *xyz, double *uv) {
+  (void)ctx;
+  if (!n) return HOC_OK;
+  int ierr = 0;
+  double *p = NULL;
+  size_t np = 0;
+  gmshModelGetParametrization(2, f->tag, (double *)xyz, 3 * n, &p, &np, &ierr);
+  if (ierr || np != 2 * n) {
+    gmshFree(p);
+    return hoc_gmsh_error("projection on a surface");
+  }
+  memcpy(uv, p, 2 * n * sizeof *p);
+  gmshFree(p);
+  return HOC_OK;
+}
+
+static hoc_status gmsh_curve_project(void *ctx, const hoc_cad_curve *c, size_t n,
+                                     const double *xyz, double *t) {
+  (void)ctx;
+  if (!n) return HOC_OK;
+  int ierr = 0;
+  double *p = NULL;
+  size_t np = 0;
+  gmshModelGetParametrization(1, c->tag, (double *)xyz, 3 * n, &p, &np, &ierr);
+  if (ierr || np != n) {
+    gmshFree(p);
+    return hoc_gmsh_error("projection on a curve");
+  }
+  memcpy(t, p, n * sizeof *p);
+  gmshFree(p);
+  return HOC_OK;
+}
+
+static void gmsh_destroy(void *ctx) {
+  (void)ctx;
+  int ierr = 0;
+  gmshClear(&ierr);
+  gmsh_model_in_use = 0;
+}
+
+static const hoc_cad_ops gmsh_ops = {
+    gmsh_face_eval,    gmsh_curve_eval,    gmsh_curve_to_face, gmsh_vertex_to_face,
+    gmsh_face_project, gmsh_curve_project, gmsh_destroy,
+};
+
+/* Import ------------------------------------------------------------------ */
+
+static int has_cad_extension(const char *path) {
+  const char *dot = strrchr(path, '.');
+  const char *slash = strrchr(path, '/');
+  if (!dot || (slash && dot < slash)) return 0;
+  static const char *const ext[] = {".step", ".stp", ".iges", ".igs", ".brep", ".brp"};
+  for (size_t i = 0; i < sizeof ext / sizeof *ext; ++i)
+    if (!strcasecmp(dot, ext[i])) return 1;
+  return 0;
+}
+
+static hoc_status get_entities(int dim, int **tags, size_t *n) {
+  int *dt = NULL, ierr = 0;
+  size_t ndt = 0;
+  gmshModelGetEntities(&dt, &ndt, dim, &ierr);
+  if (ierr) {
+    gmshFree(dt);
+    return hoc_gmsh_error("listing the model's entities");
+  }
+  *n = ndt / 2;
+  int *t = hoc_calloc(*n, sizeof *t);
+  if (!t) {
+    gmshFree(dt);
+    return HOC_ERROR(HOC_ERR_MEMORY, "out of memory for %zu entities", *n);
+  }
+  for (size_t i = 0; i < *n; ++i) t[i] = dt[2 * i + 1];
+  gmshFree(dt);
+  *tags = t;
+  return HOC_OK;
+}
+
+static hoc_status get_bounds(int dim, int tag, double *lo, double *hi) {
+  double *mn = NULL, *mx = NULL;
+  size_t nmn = 0, nmx = 0;
+  int ierr = 0;
+  gmshModelGetParametrizationBounds(dim, tag, &mn, &nmn, &mx, &nmx, &ierr);
+  if (ierr || nmn != (size_t)dim || nmx != (size_t)dim) {
+    gmshFree(mn);
+    gmshFree(mx);
+    return hoc_gmsh_error("reading parametric bounds");
+  }
+  for (int k = 0; k < dim; ++k) {
+    lo[k] = mn[k];
+    hi[k] = mx[k];
+  }
+  gmshFree(mn);
+  gmshFree(mx);
+  return HOC_OK;
+}
+
+static hoc_status get_boundary(int dim, int tag, int **bnd, int *n) {
+  int dimtag[2] = {dim, tag}, *out = NULL, ierr = 0;
+  size_t nout = 0;
+  gmshModelGetBoundary(dimtag, 2, &out, &nout, 0, 1, 0, &ierr);
+  if (ierr) {
+    gmshFree(out);
+    return hoc_gmsh_error("reading an entity's boundary");
+  }
+  *n = (int)(nout / 2);
+  int *b = hoc_calloc((size_t)*n, sizeof *b);
+  if (!b) {
+    gmshFree(out);
+    return HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
+  }
+  for (int i = 0; i < *n; ++i) b[i] = out[2 * i + 1];
+  gmshFree(out);
+  *bnd = b;
+  return HOC_OK;
+}
+
+static void get_bbox(int dim, int tag, double *bb) {
+  int ierr = 0;
+  gmshModelGetBoundingBox(dim, tag, bb, bb + 1, bb + 2, bb + 3, bb + 4, bb + 5, &ierr);
+  if (ierr)
+    for (int k = 0; k < 6; ++k) bb[k] = 0;
+}
+
+static hoc_status fill_model(hoc_model *m, const int *ftags, const int *ctags, const int *vtags) {
+  int ierr = 0;
+  for (int i = 0; i < m->n_vertices; ++i) {
+    hoc_cad_vertex *v = &m->vertices[i];
+    v->tag = vtags[i];
+    double bb[6];
+    get_bbox(0, v->tag, bb);
+    for (int k = 0; k < 3; ++k) v->xyz[k] = 0.5 * (bb[k] + bb[k + 3]);
+  }
+  for (int i = 0; i < m->n_curves; ++i) {
+    hoc_cad_curve *c = &m->curves[i];
+    c->tag = ctags[i];
+    HOC_TRY(get_bounds(1, c->tag, &c->lo, &c->hi));
+    get_bbox(1, c->tag, c->bbox);
+    int *b = NULL, nb = 0;
+    HOC_TRY(get_boundary(1, c->tag, &b, &nb));
+    /* gmsh lists a curve's start vertex first */
+    c->v0 = c->v1 = -1;
+    for (int k = 0; k < nb && k < 2; ++k) {
+      int idx = -1;
+      for (int j = 0; j < m->n_vertices; ++j)
+        if (m->vertices[j].tag == abs(b[k])) idx = j;
+      if (k == 0) c->v0 = idx;
+      else c->v1 = idx;
+    }
+    if (nb == 1) c->v1 = c->v0; /* closed curve with one vertex */
+    free(b);
+  }
+  for (int i = 0; i < m->n_faces; ++i) {
+    hoc_cad_face *f = &m->faces[i];
+    f->tag = ftags[i];
+    HOC_TRY(get_bounds(2, f->tag, f->lo, f->hi));
+    get_bbox(2, f->tag, f->bbox);
+    HOC_TRY(get_boundary(2, f->tag, &f->curves, &f->n_curves));
+    char *s = NULL;
+    gmshModelGetType(2, f->tag, &s, &ierr);
+    if (!ierr && s) snprintf(f->type, sizeof f->type, "%s", s);
+    gmshFree(s);
+    s = NULL;
+    gmshModelGetEntityName(2, f->tag, &s, &ierr);
+    if (!ierr && s) snprintf(f->name, sizeof f->name, "%s", s);
+    gmshFree(s);
+  }
+  get_bbox(-1, -1, m->bbox);
+  return HOC_OK;
+}
+
+hoc_status hoc_cad_open_gmsh(const char *path, hoc_model **model) {
+  HOC_CHECK(model, HOC_ERR_ARGUMENT, "model output is NULL");
+  *model = NULL;
+  HOC_CHECK(path && path[0], HOC_ERR_ARGUMENT, "no CAD file name given");
+  HOC_CHECK(!gmsh_model_in_use, HOC_ERR_ARGUMENT,
+            "another CAD model is open: gmsh holds one model at a time");
+  struct stat sb;
+  if (stat(path, &sb) != 0)
+    return HOC_ERROR(HOC_ERR_IO, "cannot open '%s': %s", path, strerror(errno));
+  HOC_CHECK(!S_ISDIR(sb.st_mode), HOC_ERR_IO, "'%s' is a directory, not a CAD file", path);
+  FILE *probe = fopen(path, "rb");
+  if (!probe) return HOC_ERROR(HOC_ERR_IO, "cannot read '%s': %s", path, strerror(errno));
+  fclose(probe);
+  HOC_CHECK(has_cad_extension(path), HOC_ERR_FORMAT,
+            "'%s' is not a CAD file: expected .step, .stp, .iges, .igs or .brep", path);
+  HOC_CHECK(sb.st_size > 0, HOC_ERR_FORMAT, "'%s' is empty", path);
+  HOC_TRY(hoc_gmsh_start());
+
+  int ierr = 0;
+  gmshClear(&ierr);
+  hoc_quiet q;
+  hoc_quiet_begin(&q);
+  gmshOpen(path, &ierr);
+  char kernel_msg[256];
+  hoc_quiet_end(&q, kernel_msg, sizeof kernel_msg);
+  if (ierr) {
+    gmshClear(&ierr);
+    if (kernel_msg[0])
+      return HOC_ERROR(HOC_ERR_FORMAT, "cannot read CAD file '%s': %s", path, kernel_msg);
+    return HOC_ERROR(HOC_ERR_FORMAT, "cannot read CAD file '%s' (corrupt or unsupported)", path);
+  }
+
+  int *ftags = NULL, *ctags = NULL, *vtags = NULL;
+  size_t nf = 0, nc = 0, nv = 0;
+  hoc_model *m = NULL;
+  hoc_status status = HOC_OK;
+  HOC_TRY_GOTO(get_entities(2, &ftags, &nf), fail);
+  HOC_TRY_GOTO(get_entities(1, &ctags, &nc), fail);
+  HOC_TRY_GOTO(get_entities(0, &vtags, &nv), fail);
+  if (nf == 0) {
+    status = HOC_ERROR(HOC_ERR_CAD, "'%s' holds no surface (no CAD face to mesh)", path);
+    goto fail;
+  }
+  HOC_TRY_GOTO(hoc_cad_create((int)nf, (int)nc, (int)nv, &m), fail);
+  m->ops = &gmsh_ops;
+  m->ctx = NULL;
+  m->thread_safe = 0;
+  m->is_gmsh = 1;
+  gmsh_model_in_use = 1;
+  HOC_TRY_GOTO(fill_model(m, ftags, ctags, vtags), fail);
+  HOC_TRY_GOTO(hoc_cad_finish(m), fail);
+  free(ftags);
+  free(ctags);
+  free(vtags);
+  *model = m;
+  return HOC_OK;
+fail:
+  free(ftags);
+  free(ctags);
+  free(vtags);
+  if (m) {
+    hoc_model_destroy(&m); /* clears gmsh */
+  } else {
+    gmshClear(&ierr);
+  }
+  return status;
+}
+
+hoc_status hoc_model_open(const char *path, hoc_model **model) {
+  return hoc_cad_open_gmsh(path, model);
+}

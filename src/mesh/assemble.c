@@ -1,0 +1,762 @@
+/* From a classified triangulation to a hoc_mesh: parameters of every node,
+ * slots (node seen from a face), unwrapped element parameters, poles, curve
+ * lines, face orientation.
+ * SPDX-License-Identifier: GPL-2.0-or-later */
+#include "core/hash.h"
+#include "mesh/mesh.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* Index of the first node of local edge k (0..2) in gmsh ordering. */
+static inline int edge_first_node(int p, int k) { return 3 + k * (p - 1); }
+
+static double dist3(const double *a, const double *b) {
+  double dx = a[0] - b[0], dy = a[1] - b[1], dz = a[2] - b[2];
+  return sqrt(dx * dx + dy * dy + dz * dz);
+}
+
+static size_t node_label(const hoc_mesh_source *src, size_t i) {
+  return src->node_tag ? src->node_tag[i] : i + 1;
+}
+
+/* Validation ------------------------------------------------------------- */
+
+static hoc_status validate(const hoc_model *model, const hoc_mesh_source *src) {
+  HOC_CHECK(src->order >= 1 && src->order <= HOC_MAX_ORDER, HOC_ERR_ARGUMENT,
+            "element order %d out of range 1..%d", src->order, HOC_MAX_ORDER);
+  HOC_CHECK(src->n_elems > 0, HOC_ERR_MESH, "the mesh has no triangles");
+  HOC_CHECK(src->n_nodes > 0 && src->n_nodes < ((size_t)1 << 32), HOC_ERR_ARGUMENT,
+            "node count %zu out of range", src->n_nodes);
+  HOC_CHECK(src->dim && src->entity && src->conn && src->elem_face, HOC_ERR_ARGUMENT,
+            "incomplete mesh source");
+  for (size_t i = 0; i < src->n_nodes; ++i) {
+    int d = src->dim[i], e = src->entity[i];
+    int n_ent = d == 0 ? model->n_vertices : d == 1 ? model->n_curves : model->n_faces;
+    HOC_CHECK(d >= 0 && d <= 2, HOC_ERR_MISMATCH, "node %zu is not on a CAD vertex, curve or face",
+              node_label(src, i));
+    HOC_CHECK(e >= 0 && e < n_ent, HOC_ERR_MISMATCH,
+              "node %zu is on a CAD entity the model does not have", node_label(src, i));
+    if (src->xyz)
+      HOC_CHECK(isfinite(src->xyz[3 * i]) && isfinite(src->xyz[3 * i + 1]) &&
+                    isfinite(src->xyz[3 * i + 2]),
+                HOC_ERR_FORMAT, "node %zu has a non-finite coordinate", node_label(src, i));
+    if (src->param && (!src->has_param || src->has_param[i]))
+      HOC_CHECK(isfinite(src->param[2 * i]) && isfinite(src->param[2 * i + 1]), HOC_ERR_FORMAT,
+                "node %zu has a non-finite parametric coordinate", node_label(src, i));
+  }
+  int np = (src->order + 1) * (src->order + 2) / 2;
+  for (size_t e = 0; e < src->n_elems; ++e) {
+    HOC_CHECK(src->elem_face[e] >= 0 && src->elem_face[e] < model->n_faces, HOC_ERR_MISMATCH,
+              "triangle %zu is on a face the model does not have", e + 1);
+    for (int k = 0; k < np; ++k) {
+      size_t i = src->conn[e * (size_t)np + k];
+      HOC_CHECK(i < src->n_nodes, HOC_ERR_ARGUMENT, "triangle %zu refers to a missing node", e + 1);
+      if (src->dim[i] == HOC_ON_FACE)
+        HOC_CHECK(src->entity[i] == src->elem_face[e], HOC_ERR_MISMATCH,
+                  "triangle %zu on face %d uses node %zu of face %d", e + 1,
+                  model->faces[src->elem_face[e]].tag, node_label(src, i),
+                  model->faces[src->entity[i]].tag);
+    }
+    for (int a = 0; a < 3; ++a)
+      for (int b = a + 1; b < 3; ++b)
+        HOC_CHECK(src->conn[e * (size_t)np + a] != src->conn[e * (size_t)np + b],
+                  HOC_ERR_MESH, "triangle %zu repeats a vertex", e + 1);
+  }
+  for (size_t l = 0; l < src->n_lines; ++l) {
+    HOC_CHECK(src->line_curve[l] >= 0 && src->line_curve[l] < model->n_curves, HOC_ERR_MISMATCH,
+              "line %zu is on a curve the model does not have", l + 1);
+    for (int k = 0; k <= src->order; ++k)
+      HOC_CHECK(src->line_conn[l * (size_t)(src->order + 1) + k] < src->n_nodes,
+                HOC_ERR_ARGUMENT, "line %zu refers to a missing node", l + 1);
+  }
+  return HOC_OK;
+}
+
+/* Parameter of a vertex on one of its curves: lo at the start, hi at the end;
+ * on a closed curve the one nearest `near` (NAN: lo). */
+static double vertex_t_on_curve(const hoc_cad_curve *c, int vertex, double near, int *ok) {
+  *ok = 1;
+  int at0 = c->v0 == vertex, at1 = c->v1 == vertex;
+  if (at0 && at1) {
+    if (isnan(near)) return c->lo;
+    return fabs(near - c->lo) <= fabs(near - c->hi) ? c->lo : c->hi;
+  }
+  if (at0) return c->lo;
+  if (at1) return c->hi;
+  *ok = 0;
+  return NAN;
+}
+
+/* Parameters of nodes the source gave none: curve nodes along lines and by
+ * projection; face nodes from neighbours inside their elements. */
+static hoc_status recover_params(hoc_mesh *m, const hoc_mesh_source *src,
+                                 unsigned char *known, double tol) {
+  const hoc_model *model = m->model;
+  int p = m->order, np = m->np;
+  /* curve nodes: guesses along the lines, repeated until no progress */
+  int progress = 1;
+  while (progress) {
+    progress = 0;
+    for (size_t l = 0; l < src->n_lines; ++l) {
+      const size_t *ln = src->line_conn + l * (size_t)(p + 1);
+      int c = src->line_curve[l];
+      double guess = NAN;
+      for (int k = 0; k <= p && isnan(guess); ++k) {
+        size_t i = ln[k];
+        if (m->dim[i] == HOC_ON_CURVE && m->entity[i] == c && known[i]) guess = m->param[2 * i];
+        if (m->dim[i] == HOC_ON_VERTEX) {
+          int ok;
+          double t = vertex_t_on_curve(&model->curves[c], m->entity[i], NAN, &ok);
+          if (ok) guess = t;
+        }
+      }
+      if (isnan(guess)) continue;
+      for (int k = 0; k <= p; ++k) {
+        size_t i = ln[k];
+        if (m->dim[i] != HOC_ON_CURVE || known[i] || m->entity[i] != c) continue;
+        double t = guess, d;
+        HOC_TRY(hoc_cad_curve_invert(model, c, src->xyz + 3 * i, &t, &d));
+        if (d <= tol) {
+          m->param[2 * i] = t;
+          known[i] = 1;
+          progress = 1;
+        }
+      }
+    }
+  }
+  for (size_t i = 0; i < m->n_nodes; ++i) {
+    if (m->dim[i] != HOC_ON_CURVE || known[i]) continue;
+    int c = m->entity[i];
+    double t, d;
+    HOC_TRY(model->ops->curve_project(model->ctx, &model->curves[c], 1, src->xyz + 3 * i, &t));
+    HOC_TRY(hoc_cad_curve_invert(model, c, src->xyz + 3 * i, &t, &d));
+    HOC_CHECK(d <= tol, HOC_ERR_MISMATCH,
+              "node %zu is %.3g away from curve %d: the mesh does not match this model",
+              node_label(src, i), d, model->curves[c].tag);
+    m->param[2 * i] = t;
+    known[i] = 1;
+  }
+  /* face nodes: breadth-first through the elements; a node is located from
+   * the parameters of a located node of the same element (an unwrapped
+   * guess, so Newton converges in a few steps); where no element links a
+   * located node to the rest, one node is projected (slow) as a seed */
+  size_t missing = 0;
+  for (size_t i = 0; i < m->n_nodes; ++i) missing += m->dim[i] == HOC_ON_FACE && !known[i];
+  if (!missing) return HOC_OK;
+  size_t *first = NULL, *list = NULL, *queue = NULL;
+  unsigned char *queued = NULL;
+  hoc_status status = HOC_OK;
+  first = hoc_calloc(m->n_nodes + 1, sizeof *first);
+  list = hoc_calloc(m->n_elems * (size_t)np, sizeof *list);
+  queue = hoc_calloc(m->n_elems, sizeof *queue);
+  queued = hoc_calloc(m->n_elems, 1);
+  if (!first || !list || !queue || !queued) {
+    status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
+    goto done;
+  }
+  /* node -> elements (CSR) */
+  for (size_t e = 0; e < m->n_elems; ++e)
+    for (int k = 0; k < np; ++k) first[src->conn[e * (size_t)np + k] + 1]++;
+  for (size_t i = 0; i < m->n_nodes; ++i) first[i + 1] += first[i];
+  for (size_t e = 0; e < m->n_elems; ++e)
+    for (int k = 0; k < np; ++k) list[first[src->conn[e * (size_t)np + k]]++] = e;
+  for (size_t i = m->n_nodes; i > 0; --i) first[i] = first[i - 1];
+  first[0] = 0;
+  size_t head = 0, tail = 0;
+  for (size_t e = 0; e < m->n_elems; ++e)
+    for (int k = 0; k < np && !queued[e]; ++k) {
+      size_t i = src->conn[e * (size_t)np + k];
+      if (m->dim[i] == HOC_ON_FACE && known[i]) {
+        queued[e] = 1;
+        queue[tail++] = e;
+      }
+    }
+  size_t scan = 0; /* next node to consider as a projection seed */
+  while (missing) {
+    if (head == tail) {
+      while (!(m->dim[scan] == HOC_ON_FACE && !known[scan])) ++scan;
+      size_t i = scan;
+      int f = m->entity[i];
+      double uv[2], d;
+      HOC_TRY_GOTO(model->ops->face_project(model->ctx, &model->faces[f], 1, src->xyz + 3 * i, uv),
+                   done);
+      HOC_TRY_GOTO(hoc_cad_face_invert(model, f, src->xyz + 3 * i, uv, &d), done);
+      if (!(d <= tol)) {
+        status = HOC_ERROR(HOC_ERR_MISMATCH,
+                           "node %zu is %.3g away from face %d: the mesh does not match this "
+                           "model",
+                           node_label(src, i), d, model->faces[f].tag);
+        goto done;
+      }
+      hoc_cad_face_wrap(&model->faces[f], uv);
+      memcpy(m->param + 2 * i, uv, sizeof uv);
+      known[i] = 1;
+      --missing;
+      for (size_t j = first[i]; j < first[i + 1]; ++j)
+        if (!queued[list[j]]) {
+          queued[list[j]] = 1;
+          queue[tail++] = list[j];
+        }
+      continue;
+    }
+    size_t e = queue[head++];
+    const size_t *cn = src->conn + e * (size_t)np;
+    int f = src->elem_face[e];
+    double guess[2] = {0, 0};
+    for (int k = 0; k < np; ++k)
+      if (m->dim[cn[k]] == HOC_ON_FACE && known[cn[k]]) {
+        memcpy(guess, m->param + 2 * cn[k], sizeof guess);
+        break;
+      }
+    for (int k = 0; k < np; ++k) {
+      size_t i = cn[k];
+      if (m->dim[i] != HOC_ON_FACE || known[i]) continue;
+      double uv[2] = {guess[0], guess[1]}, d;
+      HOC_TRY_GOTO(hoc_cad_face_invert(model, f, src->xyz + 3 * i, uv, &d), done);
+      if (!(d <= tol)) continue; /* another element may bring a better guess */
+      hoc_cad_face_wrap(&model->faces[f], uv);
+      memcpy(m->param + 2 * i, uv, sizeof uv);
+      known[i] = 1;
+      --missing;
+      for (size_t j = first[i]; j < first[i + 1]; ++j)
+        if (!queued[list[j]]) {
+          queued[list[j]] = 1;
+          queue[tail++] = list[j];
+        }
+    }
+  }
+done:
+  free(first);
+  free(list);
+  free(queue);
+  free(queued);
+  return status;
+}
+
+/* Slots ------------------------------------------------------------------ */
+
+static hoc_status build_slots(hoc_mesh *m) {
+  int np = m->np;
+  hoc_hash h;
+  HOC_TRY(hoc_hash_init(&h, m->n_nodes + m->n_nodes / 4));
+  hoc_status status = HOC_OK;
+  size_t cap = m->n_nodes + 16, n = 0;
+  size_t *node = hoc_calloc(cap, sizeof *node);
+  int *face = hoc_calloc(cap, sizeof *face);
+  if (!node || !face) {
+    status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
+    goto fail;
+  }
+  uint64_t nf = (uint64_t)m->model->n_faces;
+  for (size_t e = 0; e < m->n_elems; ++e) {
+    int f = m->elem_face[e];
+    for (int k = 0; k < np; ++k) {
+      size_t i = m->conn[e * (size_t)np + k], s;
+      int found;
+      HOC_TRY_GOTO(hoc_hash_insert(&h, (uint64_t)i * nf + (uint64_t)f, n, &found, &s), fail);
+      if (!found) {
+        if (n == cap) {
+          cap *= 2;
+          size_t *n2 = hoc_realloc(node, cap, sizeof *node);
+          if (n2) node = n2;
+          int *f2 = hoc_realloc(face, cap, sizeof *face);
+          if (f2) face = f2;
+          if (!n2 || !f2) {
+            status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
+            goto fail;
+          }
+        }
+        node[n] = i;
+        face[n] = f;
+        ++n;
+      }
+      m->elem_slot[e * (size_t)np + k] = s;
+    }
+  }
+  hoc_hash_free(&h);
+  m->n_slots = n;
+  m->slot_node = node;
+  m->slot_face = face;
+  m->slot_uv = hoc_calloc(2 * n, sizeof *m->slot_uv);
+  m->slot_pole = hoc_calloc(n, sizeof *m->slot_pole);
+  HOC_CHECK(m->slot_uv && m->slot_pole, HOC_ERR_MEMORY, "out of memory");
+  return HOC_OK;
+fail:
+  hoc_hash_free(&h);
+  free(node);
+  free(face);
+  return status;
+}
+
+/* Parameters of every slot on its face; checked against the node position. */
+static hoc_status slot_params(hoc_mesh *m, const hoc_mesh_source *src, double tol) {
+  const hoc_model *model = m->model;
+  /* group the curve slots by (curve, face) for batched reparametrisation */
+  size_t n = m->n_slots;
+  size_t *order;
+  HOC_ALLOC(order, n);
+  size_t cnt = 0;
+  for (size_t s = 0; s < n; ++s) {
+    size_t i = m->slot_node[s];
+    if (m->dim[i] == HOC_ON_FACE) {
+      memcpy(m->slot_uv + 2 * s, m->param + 2 * i, 2 * sizeof(double));
+    } else if (m->dim[i] == HOC_ON_VERTEX) {
+      hoc_status st = hoc_cad_vertex_to_face(model, m->entity[i], m->slot_face[s],
+                                             m->slot_uv + 2 * s);
+      if (st != HOC_OK) m->slot_uv[2 * s] = m->slot_uv[2 * s + 1] = NAN;
+    } else {
+      order[cnt++] = s;
+    }
+  }
+  /* simple insertion-free grouping: sort curve slots by (curve, face) */
+  int nfaces = model->n_faces;
+  size_t *keys = hoc_calloc(cnt, sizeof *keys);
+  double *t = hoc_calloc(cnt, sizeof *t), *uv = hoc_calloc(2 * cnt, sizeof *uv);
+  hoc_status status = HOC_OK;
+  if (!keys || !t || !uv) {
+    status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
+    goto done;
+  }
+  for (size_t k = 0; k < cnt; ++k) {
+    size_t s = order[k];
+    keys[k] = (size_t)m->entity[m->slot_node[s]] * (size_t)nfaces + (size_t)m->slot_face[s];
+  }
+  /* counting sort would need a table of curves x faces; a merge sort on keys */
+  {
+    size_t *tmp_o = hoc_calloc(cnt, sizeof *tmp_o), *tmp_k = hoc_calloc(cnt, sizeof *tmp_k);
+    if (!tmp_o || !tmp_k) {
+      free(tmp_o);
+      free(tmp_k);
+      status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
+      goto done;
+    }
+    for (size_t w = 1; w < cnt; w *= 2) {
+      for (size_t lo = 0; lo < cnt; lo += 2 * w) {
+        size_t mid = lo + w < cnt ? lo + w : cnt, hi = lo + 2 * w < cnt ? lo + 2 * w : cnt;
+        size_t a = lo, b = mid, o = lo;
+        while (a < mid || b < hi) {
+          if (b >= hi || (a < mid && keys[a] <= keys[b])) {
+            tmp_k[o] = keys[a];
+            tmp_o[o++] = order[a++];
+          } else {
+            tmp_k[o] = keys[b];
+            tmp_o[o++] = order[b++];
+          }
+        }
+      }
+      memcpy(keys, tmp_k, cnt * sizeof *keys);
+      memcpy(order, tmp_o, cnt * sizeof *order);
+    }
+    free(tmp_o);
+    free(tmp_k);
+  }
+  for (size_t a = 0; a < cnt;) {
+    size_t b = a;
+    while (b < cnt && keys[b] == keys[a]) ++b;
+    int c = (int)(keys[a] / (size_t)nfaces), f = (int)(keys[a] % (size_t)nfaces);
+    for (size_t k = a; k < b; ++k) t[k - a] = m->param[2 * m->slot_node[order[k]]];
+    hoc_status st = hoc_cad_curve_to_face(model, c, f, b - a, t, uv);
+    for (size_t k = a; k < b; ++k) {
+      double *dst = m->slot_uv + 2 * order[k];
+      if (st == HOC_OK) {
+        dst[0] = uv[2 * (k - a)];
+        dst[1] = uv[2 * (k - a) + 1];
+      } else {
+        dst[0] = dst[1] = NAN;
+      }
+    }
+    a = b;
+  }
+  /* verify: phi_f(slot uv) must be the node; repair by local inversion or projection */
+  for (size_t s = 0; s < n; ++s) {
+    size_t i = m->slot_node[s];
+    if (m->dim[i] == HOC_ON_FACE) continue;
+    int f = m->slot_face[s];
+    double *p = m->slot_uv + 2 * s, x[3], d = INFINITY;
+    if (isfinite(p[0]) && isfinite(p[1])) {
+      HOC_TRY_GOTO(hoc_cad_face_eval(model, f, 1, p, x, NULL, NULL), done);
+      d = dist3(x, m->xyz + 3 * i);
+    }
+    if (d > tol) {
+      if (!(isfinite(p[0]) && isfinite(p[1])))
+        HOC_TRY_GOTO(model->ops->face_project(model->ctx, &model->faces[f], 1, m->xyz + 3 * i, p),
+                     done);
+      HOC_TRY_GOTO(hoc_cad_face_invert(model, f, m->xyz + 3 * i, p, &d), done);
+    }
+    if (d > tol) {
+      status = HOC_ERROR(HOC_ERR_MISMATCH,
+                         "node %zu is %.3g away from face %d it bounds: the mesh does not match "
+                         "this model",
+                         node_label(src, i), d, model->faces[f].tag);
+      goto done;
+    }
+  }
+  /* poles: a coordinate is arbitrary where the node sits on a degenerate side */
+  for (size_t s = 0; s < n; ++s) {
+    const hoc_cad_face *f = &model->faces[m->slot_face[s]];
+    const double *p = m->slot_uv + 2 * s;
+    for (int side = 0; side < 4; ++side) {
+      if (!f->pole[side]) continue;
+      int d = side / 2;
+      double at = side % 2 ? f->hi[d] : f->lo[d], range = f->hi[d] - f->lo[d];
+      if (fabs(p[d] - at) <= 1e-9 * range + 1e-300) m->slot_pole[s] |= (unsigned char)(1 << (1 - d));
+    }
+  }
+done:
+  free(order);
+  free(keys);
+  free(t);
+  free(uv);
+  return status;
+}
+
+/* Element parameters, unwrapped around a regular node of the element; pole
+ * nodes take the mean of the element's regular vertices in the arbitrary
+ * coordinate. */
+static void element_params(hoc_mesh *m) {
+  const hoc_model *model = m->model;
+  int np = m->np;
+  for (size_t e = 0; e < m->n_elems; ++e) {
+    const hoc_cad_face *f = &model->faces[m->elem_face[e]];
+    const size_t *sl = m->elem_slot + e * (size_t)np;
+    double *uv = m->elem_uv + 2 * e * (size_t)np;
+    int anchor = -1;
+    for (int k = 0; k < np && anchor < 0; ++k)
+      if (m->dim[m->slot_node[sl[k]]] == HOC_ON_FACE) anchor = k;
+    for (int k = 0; k < np && anchor < 0; ++k)
+      if (!m->slot_pole[sl[k]]) anchor = k;
+    if (anchor < 0) anchor = 0;
+    const double *ref = m->slot_uv + 2 * sl[anchor];
+    for (int k = 0; k < np; ++k) {
+      uv[2 * k] = m->slot_uv[2 * sl[k]];
+      uv[2 * k + 1] = m->slot_uv[2 * sl[k] + 1];
+      hoc_cad_face_unwrap_near(f, ref, uv + 2 * k);
+    }
+    for (int k = 0; k < np; ++k) {
+      unsigned char pole = m->slot_pole[sl[k]];
+      for (int d = 0; d < 2; ++d) {
+        if (!(pole & (1 << d))) continue;
+        double sum = 0;
+        int cnt = 0;
+        for (int j = 0; j < 3; ++j)
+          if (j != k && !(m->slot_pole[sl[j]] & (1 << d))) {
+            sum += uv[2 * j + d];
+            ++cnt;
+          }
+        if (cnt) uv[2 * k + d] = sum / cnt;
+      }
+    }
+  }
+}
+
+/* Lines ------------------------------------------------------------------ */
+
+/* Parameter of line end `i` on curve c, given the other end's parameter
+ * (NAN if unknown). */
+static int end_param(const hoc_mesh *m, size_t i, int c, double near, double *t) {
+  if (m->dim[i] == HOC_ON_CURVE) {
+    if (m->entity[i] != c) return 0;
+    *t = m->param[2 * i];
+    return 1;
+  }
+  if (m->dim[i] != HOC_ON_VERTEX) return 0;
+  int ok;
+  *t = vertex_t_on_curve(&m->model->curves[c], m->entity[i], near, &ok);
+  return ok;
+}
+
+static hoc_status line_params(hoc_mesh *m, size_t l) {
+  const hoc_model *model = m->model;
+  int p = m->order, c = m->line_curve[l];
+  const hoc_cad_curve *cv = &model->curves[c];
+  const size_t *ln = m->line_conn + l * (size_t)(p + 1);
+  double ta = NAN, tb = NAN;
+  /* an interior node (p >= 2) or a curve-node end tells which copy to take */
+  double hint = NAN;
+  if (p >= 2 && m->dim[ln[2]] == HOC_ON_CURVE) hint = m->param[2 * ln[2]];
+  int oka = m->dim[ln[0]] == HOC_ON_CURVE ? end_param(m, ln[0], c, NAN, &ta) : 0;
+  int okb = m->dim[ln[1]] == HOC_ON_CURVE ? end_param(m, ln[1], c, NAN, &tb) : 0;
+  if (!oka) oka = end_param(m, ln[0], c, okb ? tb : hint, &ta);
+  if (!okb) okb = end_param(m, ln[1], c, oka ? (isnan(hint) ? ta : hint) : hint, &tb);
+  HOC_CHECK(oka && okb, HOC_ERR_MISMATCH, "a mesh line on curve %d has an end off that curve",
+            cv->tag);
+  if (cv->period > 0) tb -= cv->period * floor((tb - ta) / cv->period + 0.5);
+  if (cv->period > 0 && ta == tb) tb = ta + cv->period; /* a closed curve in one line */
+  m->line_t[2 * l] = ta;
+  m->line_t[2 * l + 1] = tb;
+  return HOC_OK;
+}
+
+/* Lines from the element edges when the source has none: an edge is on a
+ * curve when its interior nodes are (p >= 2), or for p = 1 when it joins two
+ * nodes of one curve and bounds its face (one triangle of that face on it,
+ * or triangles of two faces). */
+static hoc_status infer_lines(hoc_mesh *m) {
+  const hoc_model *model = m->model;
+  int p = m->order, np = m->np;
+  hoc_hash use;
+  HOC_TRY(hoc_hash_init(&use, 3 * m->n_elems));
+  hoc_status status = HOC_OK;
+  /* for p = 1: count the triangles of each face on each edge: key edge, value
+   * count * (n_faces + 1) + face (-1 if faces differ) */
+  size_t *count = hoc_calloc(3 * m->n_elems, sizeof *count);
+  int *eface = hoc_calloc(3 * m->n_elems, sizeof *eface);
+  size_t n_edges = 0, cap = 64, n_lines = 0;
+  size_t *lc = hoc_calloc(cap * (size_t)(p + 1), sizeof *lc);
+  int *lcv = hoc_calloc(cap, sizeof *lcv);
+  if (!count || !eface || !lc || !lcv) {
+    status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
+    goto done;
+  }
+  for (size_t e = 0; e < m->n_elems; ++e)
+    for (int k = 0; k < 3; ++k) {
+      size_t a = m->conn[e * (size_t)np + k], b = m->conn[e * (size_t)np + (k + 1) % 3], id;
+      int found;
+      HOC_TRY_GOTO(hoc_hash_insert(&use, hoc_pair_key(a, b), n_edges, &found, &id), done);
+      if (!found) {
+        eface[n_edges] = m->elem_face[e];
+        ++n_edges;
+      } else if (eface[id] != m->elem_face[e]) {
+        eface[id] = -1;
+      }
+      count[id]++;
+    }
+  hoc_hash seen;
+  HOC_TRY_GOTO(hoc_hash_init(&seen, 64), done);
+  for (size_t e = 0; e < m->n_elems; ++e)
+    for (int k = 0; k < 3; ++k) {
+      const size_t *cn = m->conn + e * (size_t)np;
+      size_t a = cn[k], b = cn[(k + 1) % 3];
+      int c = -1, ok = 1;
+      for (int j = 0; j < p - 1 && ok; ++j) {
+        size_t i = cn[edge_first_node(p, k) + j];
+        if (m->dim[i] != HOC_ON_CURVE || (c >= 0 && m->entity[i] != c)) ok = 0;
+        else c = m->entity[i];
+      }
+      if (!ok) continue;
+      if (p == 1) {
+        size_t id = hoc_hash_get(&use, hoc_pair_key(a, b));
+        if (!(count[id] == 1 || eface[id] < 0)) continue;
+        if (m->dim[a] == HOC_ON_CURVE) c = m->entity[a];
+        else if (m->dim[b] == HOC_ON_CURVE) c = m->entity[b];
+        else if (m->dim[a] == HOC_ON_VERTEX && m->dim[b] == HOC_ON_VERTEX) {
+          int va = m->entity[a], vb = m->entity[b], hits = 0;
+          for (int ci = 0; ci < model->n_curves; ++ci) {
+            const hoc_cad_curve *cv = &model->curves[ci];
+            if ((cv->v0 == va && cv->v1 == vb) || (cv->v0 == vb && cv->v1 == va)) {
+              c = ci;
+              ++hits;
+            }
+          }
+          if (hits != 1) continue; /* none or ambiguous: leave the edge straight in (u,v) */
+        }
+      }
+      if (c < 0) continue;
+      double t;
+      if (!end_param(m, a, c, NAN, &t) || !end_param(m, b, c, NAN, &t)) continue;
+      int found;
+      HOC_TRY_GOTO(hoc_hash_insert(&seen, hoc_pair_key(a, b), n_lines, &found, NULL), done_seen);
+      if (found) continue;
+      if (n_lines == cap) {
+        cap *= 2;
+        size_t *l2 = hoc_realloc(lc, cap * (size_t)(p + 1), sizeof *lc);
+        if (l2) lc = l2;
+        int *c2 = hoc_realloc(lcv, cap, sizeof *lcv);
+        if (c2) lcv = c2;
+        if (!l2 || !c2) {
+          status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
+          goto done_seen;
+        }
+      }
+      size_t *ln = lc + n_lines * (size_t)(p + 1);
+      ln[0] = a;
+      ln[1] = b;
+      for (int j = 0; j < p - 1; ++j) ln[2 + j] = cn[edge_first_node(p, k) + j];
+      lcv[n_lines++] = c;
+    }
+done_seen:
+  hoc_hash_free(&seen);
+  if (status == HOC_OK) {
+    m->n_lines = n_lines;
+    m->line_conn = lc;
+    m->line_curve = lcv;
+    lc = NULL;
+    lcv = NULL;
+  }
+done:
+  hoc_hash_free(&use);
+  free(count);
+  free(eface);
+  free(lc);
+  free(lcv);
+  return status;
+}
+
+/* Face orientation ------------------------------------------------------- */
+
+/* +1 if most elements of a face turn like phi_u x phi_v at their parametric
+ * centroid, -1 if most turn the other way. */
+static hoc_status orient_faces(hoc_mesh *m) {
+  const hoc_model *model = m->model;
+  int np = m->np, nf = model->n_faces;
+  long *votes;
+  HOC_ALLOC(votes, (size_t)nf);
+  hoc_status status = HOC_OK;
+  double *uv = hoc_calloc(2 * m->n_elems, sizeof *uv), *du = hoc_calloc(3 * m->n_elems, sizeof *du),
+         *dv = hoc_calloc(3 * m->n_elems, sizeof *dv);
+  size_t *idx = hoc_calloc(m->n_elems, sizeof *idx);
+  if (!uv || !du || !dv || !idx) {
+    status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
+    goto done;
+  }
+  /* elements grouped by face: a counting sort */
+  size_t *start = hoc_calloc((size_t)nf + 1, sizeof *start);
+  if (!start) {
+    status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
+    goto done;
+  }
+  for (size_t e = 0; e < m->n_elems; ++e) start[m->elem_face[e] + 1]++;
+  for (int f = 0; f < nf; ++f) start[f + 1] += start[f];
+  for (size_t e = 0; e < m->n_elems; ++e) idx[start[m->elem_face[e]]++] = e;
+  for (int f = nf; f > 0; --f) start[f] = start[f - 1];
+  start[0] = 0;
+  for (int f = 0; f < nf && status == HOC_OK; ++f) {
+    size_t n = start[f + 1] - start[f];
+    if (!n) continue;
+    for (size_t k = 0; k < n; ++k) {
+      const double *eu = m->elem_uv + 2 * idx[start[f] + k] * (size_t)np;
+      uv[2 * k] = (eu[0] + eu[2] + eu[4]) / 3;
+      uv[2 * k + 1] = (eu[1] + eu[3] + eu[5]) / 3;
+    }
+    status = hoc_cad_face_eval(model, f, n, uv, NULL, du, dv);
+    for (size_t k = 0; k < n && status == HOC_OK; ++k) {
+      const size_t *cn = m->conn + idx[start[f] + k] * (size_t)np;
+      const double *x0 = m->xyz + 3 * cn[0], *x1 = m->xyz + 3 * cn[1], *x2 = m->xyz + 3 * cn[2];
+      double a[3], b[3], c[3], nn[3];
+      for (int d = 0; d < 3; ++d) a[d] = x1[d] - x0[d], b[d] = x2[d] - x0[d];
+      c[0] = a[1] * b[2] - a[2] * b[1];
+      c[1] = a[2] * b[0] - a[0] * b[2];
+      c[2] = a[0] * b[1] - a[1] * b[0];
+      const double *u = du + 3 * k, *v = dv + 3 * k;
+      nn[0] = u[1] * v[2] - u[2] * v[1];
+      nn[1] = u[2] * v[0] - u[0] * v[2];
+      nn[2] = u[0] * v[1] - u[1] * v[0];
+      double dot = c[0] * nn[0] + c[1] * nn[1] + c[2] * nn[2];
+      votes[f] += dot > 0 ? 1 : dot < 0 ? -1 : 0;
+    }
+    m->face_orient[f] = votes[f] >= 0 ? 1 : -1;
+  }
+  free(start);
+done:
+  free(votes);
+  free(uv);
+  free(du);
+  free(dv);
+  free(idx);
+  return status;
+}
+
+/* Assembly --------------------------------------------------------------- */
+
+hoc_status hoc_mesh_assemble(hoc_model *model, const hoc_mesh_source *src, double tolerance,
+                             hoc_mesh **out) {
+  HOC_CHECK(out, HOC_ERR_ARGUMENT, "mesh output is NULL");
+  *out = NULL;
+  HOC_CHECK(model && src, HOC_ERR_ARGUMENT, "NULL model or mesh source");
+  HOC_TRY(validate(model, src));
+  HOC_CHECK(src->xyz || src->param, HOC_ERR_ARGUMENT, "nodes have neither positions nor parameters");
+  double tol = tolerance * model->diagonal;
+  hoc_mesh *m;
+  HOC_TRY(hoc_mesh_alloc(model, src->order, src->n_nodes, src->n_elems, &m));
+  hoc_status status = HOC_OK;
+  unsigned char *known = hoc_calloc(src->n_nodes, 1);
+  double *given = NULL;
+  if (!known) {
+    status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
+    goto fail;
+  }
+  m->nodeset = src->nodeset;
+  for (size_t i = 0; i < src->n_nodes; ++i) {
+    m->dim[i] = src->dim[i];
+    m->entity[i] = src->entity[i];
+    if (src->xyz) memcpy(m->xyz + 3 * i, src->xyz + 3 * i, 3 * sizeof(double));
+    if (src->dim[i] == HOC_ON_VERTEX) {
+      known[i] = 1;
+    } else if (src->param && (!src->has_param || src->has_param[i])) {
+      m->param[2 * i] = src->param[2 * i];
+      m->param[2 * i + 1] = src->dim[i] == HOC_ON_FACE ? src->param[2 * i + 1] : 0.0;
+      known[i] = 1;
+    }
+  }
+  memcpy(m->conn, src->conn, src->n_elems * (size_t)m->np * sizeof *m->conn);
+  memcpy(m->elem_face, src->elem_face, src->n_elems * sizeof *m->elem_face);
+
+  size_t unknown = 0;
+  for (size_t i = 0; i < src->n_nodes; ++i) unknown += !known[i];
+  if (unknown) {
+    HOC_CHECK(src->xyz, HOC_ERR_ARGUMENT, "nodes without parameters need positions");
+    HOC_TRY_GOTO(recover_params(m, src, known, tol), fail);
+  }
+  /* positions from parameters: every node exactly on the CAD */
+  if (src->xyz) {
+    given = hoc_calloc(3 * src->n_nodes, sizeof *given);
+    if (!given) {
+      status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
+      goto fail;
+    }
+    memcpy(given, src->xyz, 3 * src->n_nodes * sizeof *given);
+  }
+  HOC_TRY_GOTO(hoc_mesh_update_xyz(m), fail);
+  if (given) {
+    for (size_t i = 0; i < src->n_nodes; ++i) {
+      double d = dist3(given + 3 * i, m->xyz + 3 * i);
+      if (!(d <= tol)) {
+        const char *what = m->dim[i] == HOC_ON_FACE ? "face" : m->dim[i] == HOC_ON_CURVE ? "curve" : "vertex";
+        int tag = m->dim[i] == HOC_ON_FACE     ? model->faces[m->entity[i]].tag
+                  : m->dim[i] == HOC_ON_CURVE ? model->curves[m->entity[i]].tag
+                                               : model->vertices[m->entity[i]].tag;
+        status = HOC_ERROR(HOC_ERR_MISMATCH,
+                           "node %zu is %.3g away from its %s %d (tolerance %.3g): the mesh "
+                           "does not match this model",
+                           node_label(src, i), d, what, tag, tol);
+        goto fail;
+      }
+    }
+  }
+  HOC_TRY_GOTO(build_slots(m), fail);
+  HOC_TRY_GOTO(slot_params(m, src, tol), fail);
+  element_params(m);
+
+  if (src->n_lines) {
+    m->n_lines = src->n_lines;
+    m->line_conn = hoc_calloc(src->n_lines * (size_t)(m->order + 1), sizeof *m->line_conn);
+    m->line_curve = hoc_calloc(src->n_lines, sizeof *m->line_curve);
+    if (!m->line_conn || !m->line_curve) {
+      status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
+      goto fail;
+    }
+    memcpy(m->line_conn, src->line_conn,
+           src->n_lines * (size_t)(m->order + 1) * sizeof *m->line_conn);
+    memcpy(m->line_curve, src->line_curve, src->n_lines * sizeof *m->line_curve);
+  } else {
+    HOC_TRY_GOTO(infer_lines(m), fail);
+  }
+  m->line_t = hoc_calloc(2 * m->n_lines + 2, sizeof *m->line_t);
+  if (!m->line_t) {
+    status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
+    goto fail;
+  }
+  for (size_t l = 0; l < m->n_lines; ++l) HOC_TRY_GOTO(line_params(m, l), fail);
+  HOC_TRY_GOTO(orient_faces(m), fail);
+  free(known);
+  free(given);
+  *out = m;
+  return HOC_OK;
+fail:
+  free(known);
+  free(given);
+  hoc_mesh_destroy(&m);
+  return status;
+}

@@ -1,0 +1,273 @@
+/* Order elevation: new nodes placed in the face's parameter space from the
+ * reference node distribution (straight in (u,v)), nodes on CAD curves
+ * placed in the curve's parameter, then mapped onto the CAD.
+ * SPDX-License-Identifier: GPL-2.0-or-later */
+#include "basis/basis.h"
+#include "core/hash.h"
+#include "mesh/mesh.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+static double wrap_t(const hoc_cad_curve *c, double t) {
+  if (!(c->period > 0)) return t;
+  return t - c->period * floor((t - c->lo) / c->period);
+}
+
+typedef struct builder {
+  size_t n, cap;
+  double *par;
+  signed char *dim;
+  int *ent;
+} builder;
+
+static hoc_status builder_add(builder *b, int dim, int entity, double p0, double p1,
+                              size_t *index) {
+  if (b->n == b->cap) {
+    size_t cap = b->cap ? 2 * b->cap : 1024;
+    double *par = hoc_realloc(b->par, 2 * cap, sizeof *par);
+    if (par) b->par = par;
+    signed char *d = hoc_realloc(b->dim, cap, sizeof *d);
+    if (d) b->dim = d;
+    int *e = hoc_realloc(b->ent, cap, sizeof *e);
+    if (e) b->ent = e;
+    HOC_CHECK(par && d && e, HOC_ERR_MEMORY, "out of memory for %zu nodes", cap);
+    b->cap = cap;
+  }
+  b->par[2 * b->n] = p0;
+  b->par[2 * b->n + 1] = p1;
+  b->dim[b->n] = (signed char)dim;
+  b->ent[b->n] = entity;
+  *index = b->n++;
+  return HOC_OK;
+}
+
+/* Re-interpolation: the new mesh of order p on node set `set` evaluates
+ * each source element's parametric map at the new reference nodes. Nodes
+ * on CAD curves are interpolated in the curve's parameter t along the edge;
+ * other nodes in the face's (u,v), unwrapped per element. From a linear
+ * mesh this is the seed's placement (straight in (u,v)); from a curved mesh
+ * it keeps the curved geometry. */
+static hoc_status reinterpolate(const hoc_mesh *in, int p, hoc_nodeset set, hoc_mesh **out) {
+  const hoc_model *model = in->model;
+  int np = hoc_tri_num_nodes(p), npi = in->np, pin = in->order;
+  size_t ne = in->n_elems;
+  double *rs = NULL, *s = NULL, *rs_in = NULL, *s_in = NULL, *Nsrc = NULL, *L = NULL;
+  double *edge_t = NULL, *edge_uv = NULL;
+  size_t *vmap = NULL, *conn = NULL, *lconn = NULL, *edge_first = NULL, *edge_a = NULL;
+  int *lcurve = NULL;
+  hoc_lagrange *basis = NULL;
+  builder b = {0};
+  hoc_hash edges = {0}, lines = {0};
+  hoc_status status = HOC_OK;
+  HOC_ALLOC_GOTO(rs, 2 * (size_t)np, done);
+  HOC_ALLOC_GOTO(s, (size_t)p + 1, done);
+  HOC_ALLOC_GOTO(rs_in, 2 * (size_t)npi, done);
+  HOC_ALLOC_GOTO(s_in, (size_t)pin + 1, done);
+  HOC_ALLOC_GOTO(Nsrc, (size_t)np * (size_t)npi, done);
+  HOC_ALLOC_GOTO(L, (size_t)pin + 1, done);
+  HOC_ALLOC_GOTO(edge_t, (size_t)pin + 1, done);
+  HOC_ALLOC_GOTO(edge_uv, 2 * ((size_t)pin + 1), done);
+  HOC_TRY_GOTO(hoc_tri_nodes(p, set, rs), done);
+  HOC_TRY_GOTO(hoc_edge_nodes(p, set, s), done);
+  HOC_TRY_GOTO(hoc_tri_nodes(pin, in->nodeset, rs_in), done);
+  HOC_TRY_GOTO(hoc_edge_nodes(pin, in->nodeset, s_in), done);
+  HOC_TRY_GOTO(hoc_lagrange_create(pin, rs_in, &basis), done);
+  HOC_TRY_GOTO(hoc_lagrange_eval(basis, np, rs, Nsrc, NULL), done); /* [np][npi] */
+  HOC_ALLOC_GOTO(vmap, in->n_nodes, done);
+  HOC_ALLOC_GOTO(conn, ne * (size_t)np, done);
+  HOC_ALLOC_GOTO(edge_first, 3 * ne, done);
+  HOC_ALLOC_GOTO(edge_a, 3 * ne, done);
+  for (size_t i = 0; i < in->n_nodes; ++i) vmap[i] = SIZE_MAX;
+  HOC_TRY_GOTO(hoc_hash_init(&edges, 2 * ne), done);
+  HOC_TRY_GOTO(hoc_hash_init(&lines, in->n_lines), done);
+  for (size_t l = 0; l < in->n_lines; ++l) {
+    const size_t *ln = in->line_conn + l * (size_t)(pin + 1);
+    HOC_TRY_GOTO(hoc_hash_insert(&lines, hoc_pair_key(ln[0], ln[1]), l, NULL, NULL), done);
+  }
+  /* vertices keep their classification and parameters */
+  for (size_t e = 0; e < ne; ++e)
+    for (int k = 0; k < 3; ++k) {
+      size_t i = in->conn[e * (size_t)npi + k];
+      if (vmap[i] == SIZE_MAX)
+        HOC_TRY_GOTO(builder_add(&b, in->dim[i], in->entity[i], in->param[2 * i],
+                                 in->param[2 * i + 1], &vmap[i]),
+                     done);
+      conn[e * (size_t)np + k] = vmap[i];
+    }
+  size_t n_edges = 0;
+  for (size_t e = 0; e < ne; ++e) {
+    int f = in->elem_face[e];
+    const hoc_cad_face *face = &model->faces[f];
+    const size_t *cn = in->conn + e * (size_t)npi;
+    const size_t *sl = in->elem_slot + e * (size_t)npi;
+    const double *euv = in->elem_uv + 2 * e * (size_t)npi;
+    size_t *out_cn = conn + e * (size_t)np;
+    for (int k = 0; k < 3 && p > 1; ++k) {
+      int ka = k, kb = (k + 1) % 3;
+      size_t a = cn[ka], bb = cn[kb], id;
+      int found;
+      HOC_TRY_GOTO(hoc_hash_insert(&edges, hoc_pair_key(a, bb), n_edges, &found, &id), done);
+      size_t *dst = out_cn + 3 + (size_t)k * (p - 1);
+      if (found) {
+        /* created by a neighbour: same nodes, walked in its direction or back */
+        int same = edge_a[id] == a;
+        for (int j = 0; j < p - 1; ++j)
+          dst[j] = edge_first[id] + (size_t)(same ? j : p - 2 - j);
+        continue;
+      }
+      edge_a[n_edges] = a;
+      edge_first[n_edges] = b.n;
+      ++n_edges;
+      /* the source edge's nodes from a to b: local indices */
+      int loc[HOC_MAX_ORDER + 1];
+      loc[0] = ka;
+      loc[pin] = kb;
+      for (int j = 0; j < pin - 1; ++j) loc[1 + j] = 3 + k * (pin - 1) + j;
+      size_t l = hoc_hash_get(&lines, hoc_pair_key(a, bb));
+      if (l != SIZE_MAX) {
+        /* on a CAD curve: interpolate t along the edge */
+        int c = in->line_curve[l];
+        const hoc_cad_curve *cv = &model->curves[c];
+        const size_t *ln = in->line_conn + l * (size_t)(pin + 1);
+        double ta = in->line_t[2 * l], tb = in->line_t[2 * l + 1];
+        if (ln[0] != a) {
+          double tmp = ta;
+          ta = tb;
+          tb = tmp;
+        }
+        edge_t[0] = ta;
+        edge_t[pin] = tb;
+        for (int j = 1; j < pin; ++j) {
+          double t = in->param[2 * cn[loc[j]]], guess = ta + s_in[j] * (tb - ta);
+          if (cv->period > 0) t -= cv->period * floor((t - guess) / cv->period + 0.5);
+          edge_t[j] = t;
+        }
+        for (int j = 0; j < p - 1; ++j) {
+          hoc_lagrange_1d(pin, s_in, s[j + 1], L, NULL);
+          double t = 0;
+          for (int m = 0; m <= pin; ++m) t += L[m] * edge_t[m];
+          HOC_TRY_GOTO(builder_add(&b, HOC_ON_CURVE, c, wrap_t(cv, t), 0, &dst[j]), done);
+        }
+      } else {
+        /* inside the face: interpolate (u,v) along the edge; at a pole the
+         * arbitrary coordinate follows the next node (a meridian) */
+        for (int j = 0; j <= pin; ++j) memcpy(edge_uv + 2 * j, euv + 2 * loc[j], 2 * sizeof(double));
+        for (int end = 0; end < 2; ++end) {
+          int j = end ? pin : 0, next = end ? pin - 1 : 1;
+          unsigned char pole = in->slot_pole[sl[loc[j]]];
+          for (int d = 0; d < 2; ++d)
+            if (pole & (1 << d)) edge_uv[2 * j + d] = edge_uv[2 * next + d];
+        }
+        for (int j = 0; j < p - 1; ++j) {
+          hoc_lagrange_1d(pin, s_in, s[j + 1], L, NULL);
+          double uv[2] = {0, 0};
+          for (int m = 0; m <= pin; ++m) {
+            uv[0] += L[m] * edge_uv[2 * m];
+            uv[1] += L[m] * edge_uv[2 * m + 1];
+          }
+          hoc_cad_face_wrap(face, uv);
+          HOC_TRY_GOTO(builder_add(&b, HOC_ON_FACE, f, uv[0], uv[1], &dst[j]), done);
+        }
+      }
+    }
+    /* interior nodes: the source element's map in (u,v) */
+    for (int k = 3 * p; k < np; ++k) {
+      const double *Nk = Nsrc + (size_t)k * npi;
+      double uv[2] = {0, 0};
+      for (int i = 0; i < npi; ++i) {
+        uv[0] += Nk[i] * euv[2 * i];
+        uv[1] += Nk[i] * euv[2 * i + 1];
+      }
+      hoc_cad_face_wrap(face, uv);
+      HOC_TRY_GOTO(builder_add(&b, HOC_ON_FACE, f, uv[0], uv[1], &out_cn[k]), done);
+    }
+  }
+  /* lines of order p along the curve edges that elements use */
+  size_t nl = 0;
+  HOC_ALLOC_GOTO(lconn, in->n_lines * (size_t)(p + 1) + 1, done);
+  HOC_ALLOC_GOTO(lcurve, in->n_lines + 1, done);
+  for (size_t l = 0; l < in->n_lines; ++l) {
+    const size_t *ln = in->line_conn + l * (size_t)(pin + 1);
+    size_t id = hoc_hash_get(&edges, hoc_pair_key(ln[0], ln[1]));
+    if (p > 1 && id == SIZE_MAX) continue; /* a curve no element touches */
+    if (vmap[ln[0]] == SIZE_MAX || vmap[ln[1]] == SIZE_MAX) continue;
+    size_t *dst = lconn + nl * (size_t)(p + 1);
+    dst[0] = vmap[ln[0]];
+    dst[1] = vmap[ln[1]];
+    int same = p > 1 && edge_a[id] == ln[0];
+    for (int j = 0; j < p - 1; ++j) dst[2 + j] = edge_first[id] + (size_t)(same ? j : p - 2 - j);
+    lcurve[nl++] = in->line_curve[l];
+  }
+  hoc_mesh_source src = {0};
+  src.order = p;
+  src.nodeset = set;
+  src.n_nodes = b.n;
+  src.param = b.par;
+  src.dim = b.dim;
+  src.entity = b.ent;
+  src.n_elems = ne;
+  src.conn = conn;
+  src.elem_face = in->elem_face;
+  src.n_lines = nl;
+  src.line_conn = lconn;
+  src.line_curve = lcurve;
+  HOC_TRY_GOTO(hoc_mesh_assemble(in->model, &src, INFINITY, out), done);
+  if (in->n_failed_faces) {
+    (*out)->failed_faces = hoc_calloc((size_t)in->n_failed_faces, sizeof(int));
+    if (!(*out)->failed_faces) {
+      hoc_mesh_destroy(out);
+      status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
+      goto done;
+    }
+    memcpy((*out)->failed_faces, in->failed_faces, (size_t)in->n_failed_faces * sizeof(int));
+    (*out)->n_failed_faces = in->n_failed_faces;
+  }
+done:
+  hoc_lagrange_destroy(&basis);
+  free(rs);
+  free(s);
+  free(rs_in);
+  free(s_in);
+  free(Nsrc);
+  free(L);
+  free(edge_t);
+  free(edge_uv);
+  free(vmap);
+  free(conn);
+  free(lconn);
+  free(lcurve);
+  free(edge_first);
+  free(edge_a);
+  free(b.par);
+  free(b.dim);
+  free(b.ent);
+  hoc_hash_free(&edges);
+  hoc_hash_free(&lines);
+  return status;
+}
+
+static hoc_status check_set(hoc_nodeset set) {
+  HOC_CHECK(set == HOC_NODES_EQUISPACED || set == HOC_NODES_FEKETE || set == HOC_NODES_WARP_BLEND,
+            HOC_ERR_ARGUMENT, "unknown node set %d", (int)set);
+  return HOC_OK;
+}
+
+hoc_status hoc_mesh_elevate(const hoc_mesh *in, int order, hoc_nodeset set, hoc_mesh **out) {
+  HOC_CHECK(out, HOC_ERR_ARGUMENT, "mesh output is NULL");
+  *out = NULL;
+  HOC_CHECK(in, HOC_ERR_ARGUMENT, "no mesh given");
+  HOC_CHECK(order >= 1 && order <= HOC_MAX_ORDER, HOC_ERR_ARGUMENT,
+            "order %d out of range 1..%d", order, HOC_MAX_ORDER);
+  HOC_TRY(check_set(set));
+  return reinterpolate(in, order, set, out);
+}
+
+hoc_status hoc_mesh_convert_nodeset(const hoc_mesh *in, hoc_nodeset set, hoc_mesh **out) {
+  HOC_CHECK(out, HOC_ERR_ARGUMENT, "mesh output is NULL");
+  *out = NULL;
+  HOC_CHECK(in, HOC_ERR_ARGUMENT, "no mesh given");
+  HOC_TRY(check_set(set));
+  return reinterpolate(in, in->order, set, out);
+}

@@ -1,0 +1,252 @@
+/* hoc_mesh: allocation, accessors, positions and normals from parameters.
+ * SPDX-License-Identifier: GPL-2.0-or-later */
+#include "mesh/mesh.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+hoc_status hoc_mesh_alloc(hoc_model *model, int order, size_t n_nodes, size_t n_elems,
+                          hoc_mesh **out) {
+  HOC_CHECK(out, HOC_ERR_ARGUMENT, "mesh output is NULL");
+  *out = NULL;
+  HOC_CHECK(model, HOC_ERR_ARGUMENT, "no model given");
+  HOC_CHECK(order >= 1 && order <= HOC_MAX_ORDER, HOC_ERR_ARGUMENT,
+            "element order %d out of range 1..%d", order, HOC_MAX_ORDER);
+  hoc_mesh *m;
+  HOC_ALLOC(m, 1);
+  m->model = model;
+  m->order = order;
+  m->np = (order + 1) * (order + 2) / 2;
+  m->n_nodes = n_nodes;
+  m->n_elems = n_elems;
+  m->xyz = hoc_calloc(3 * n_nodes, sizeof *m->xyz);
+  m->param = hoc_calloc(2 * n_nodes, sizeof *m->param);
+  m->dim = hoc_calloc(n_nodes, sizeof *m->dim);
+  m->entity = hoc_calloc(n_nodes, sizeof *m->entity);
+  m->conn = hoc_calloc(n_elems * (size_t)m->np, sizeof *m->conn);
+  m->elem_face = hoc_calloc(n_elems, sizeof *m->elem_face);
+  m->elem_uv = hoc_calloc(2 * n_elems * (size_t)m->np, sizeof *m->elem_uv);
+  m->elem_slot = hoc_calloc(n_elems * (size_t)m->np, sizeof *m->elem_slot);
+  m->face_orient = hoc_calloc((size_t)model->n_faces, sizeof *m->face_orient);
+  if (!m->xyz || !m->param || !m->dim || !m->entity || !m->conn || !m->elem_face ||
+      !m->elem_uv || !m->elem_slot || !m->face_orient) {
+    hoc_mesh_destroy(&m);
+    return HOC_ERROR(HOC_ERR_MEMORY, "out of memory for a mesh of %zu nodes and %zu elements",
+                     n_nodes, n_elems);
+  }
+  *out = m;
+  return HOC_OK;
+}
+
+void hoc_mesh_destroy(hoc_mesh **mesh) {
+  if (!mesh || !*mesh) return;
+  hoc_mesh *m = *mesh;
+  free(m->xyz);
+  free(m->param);
+  free(m->dim);
+  free(m->entity);
+  free(m->conn);
+  free(m->elem_face);
+  free(m->elem_uv);
+  free(m->elem_slot);
+  free(m->slot_node);
+  free(m->slot_face);
+  free(m->slot_uv);
+  free(m->slot_pole);
+  free(m->line_conn);
+  free(m->line_curve);
+  free(m->line_t);
+  free(m->face_orient);
+  free(m->failed_faces);
+  free(m);
+  *mesh = NULL;
+}
+
+size_t hoc_mesh_num_elements(const hoc_mesh *mesh) { return mesh ? mesh->n_elems : 0; }
+size_t hoc_mesh_num_nodes(const hoc_mesh *mesh) { return mesh ? mesh->n_nodes : 0; }
+int hoc_mesh_order(const hoc_mesh *mesh) { return mesh ? mesh->order : 0; }
+hoc_nodeset hoc_mesh_nodeset(const hoc_mesh *mesh) {
+  return mesh ? mesh->nodeset : HOC_NODES_EQUISPACED;
+}
+int hoc_mesh_num_failed_faces(const hoc_mesh *mesh) { return mesh ? mesh->n_failed_faces : 0; }
+int hoc_mesh_element_face_tag(const hoc_mesh *mesh, size_t e) {
+  return mesh && e < mesh->n_elems ? mesh->model->faces[mesh->elem_face[e]].tag : -1;
+}
+
+/* Nodes grouped by entity: order[] lists node indices, start[e]..start[e+1]
+ * those on entity e of dimension `dim`. */
+static hoc_status group_nodes(const hoc_mesh *m, int dim, int n_entities, size_t **start_out,
+                              size_t **order_out) {
+  size_t *start, *order;
+  HOC_ALLOC(start, (size_t)n_entities + 1);
+  order = hoc_calloc(m->n_nodes, sizeof *order);
+  if (!order) {
+    free(start);
+    return HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
+  }
+  for (size_t i = 0; i < m->n_nodes; ++i)
+    if (m->dim[i] == dim) start[m->entity[i] + 1]++;
+  for (int e = 0; e < n_entities; ++e) start[e + 1] += start[e];
+  size_t *fill = hoc_calloc((size_t)n_entities + 1, sizeof *fill);
+  if (!fill) {
+    free(start);
+    free(order);
+    return HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
+  }
+  memcpy(fill, start, ((size_t)n_entities + 1) * sizeof *fill);
+  for (size_t i = 0; i < m->n_nodes; ++i)
+    if (m->dim[i] == dim) order[fill[m->entity[i]]++] = i;
+  free(fill);
+  *start_out = start;
+  *order_out = order;
+  return HOC_OK;
+}
+
+/* Positions of the nodes of one dimension from their parameters; xyz[n][3]. */
+static hoc_status eval_nodes(const hoc_mesh *m, int dim, double *xyz) {
+  const hoc_model *model = m->model;
+  if (dim == HOC_ON_VERTEX) {
+    for (size_t i = 0; i < m->n_nodes; ++i)
+      if (m->dim[i] == HOC_ON_VERTEX)
+        memcpy(xyz + 3 * i, model->vertices[m->entity[i]].xyz, 3 * sizeof *xyz);
+    return HOC_OK;
+  }
+  int n_ent = dim == HOC_ON_FACE ? model->n_faces : model->n_curves;
+  size_t *start = NULL, *order = NULL;
+  HOC_TRY(group_nodes(m, dim, n_ent, &start, &order));
+  size_t n_max = 0;
+  for (int e = 0; e < n_ent; ++e)
+    if (start[e + 1] - start[e] > n_max) n_max = start[e + 1] - start[e];
+  double *par = hoc_calloc(2 * n_max, sizeof *par), *x = hoc_calloc(3 * n_max, sizeof *x);
+  hoc_status status = HOC_OK;
+  if (!par || !x) {
+    status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
+    goto done;
+  }
+  for (int e = 0; e < n_ent; ++e) {
+    size_t n = start[e + 1] - start[e];
+    if (!n) continue;
+    const size_t *nodes = order + start[e];
+    if (dim == HOC_ON_FACE) {
+      for (size_t k = 0; k < n; ++k) memcpy(par + 2 * k, m->param + 2 * nodes[k], 2 * sizeof *par);
+      HOC_TRY_GOTO(hoc_cad_face_eval(model, e, n, par, x, NULL, NULL), done);
+    } else {
+      for (size_t k = 0; k < n; ++k) par[k] = m->param[2 * nodes[k]];
+      HOC_TRY_GOTO(hoc_cad_curve_eval(model, e, n, par, x, NULL), done);
+    }
+    for (size_t k = 0; k < n; ++k) memcpy(xyz + 3 * nodes[k], x + 3 * k, 3 * sizeof *x);
+  }
+done:
+  free(start);
+  free(order);
+  free(par);
+  free(x);
+  return status;
+}
+
+hoc_status hoc_mesh_update_xyz(hoc_mesh *m) {
+  for (int dim = 0; dim <= 2; ++dim) HOC_TRY(eval_nodes(m, dim, m->xyz));
+  return HOC_OK;
+}
+
+hoc_status hoc_mesh_max_cad_distance(const hoc_mesh *mesh, double *distance) {
+  HOC_CHECK(mesh && distance, HOC_ERR_ARGUMENT, "NULL argument");
+  double *x;
+  HOC_ALLOC(x, 3 * mesh->n_nodes);
+  hoc_status status = HOC_OK;
+  for (int dim = 0; dim <= 2 && status == HOC_OK; ++dim) status = eval_nodes(mesh, dim, x);
+  double d = 0;
+  for (size_t i = 0; i < mesh->n_nodes && status == HOC_OK; ++i) {
+    double dx = x[3 * i] - mesh->xyz[3 * i], dy = x[3 * i + 1] - mesh->xyz[3 * i + 1],
+           dz = x[3 * i + 2] - mesh->xyz[3 * i + 2];
+    double di = sqrt(dx * dx + dy * dy + dz * dz);
+    if (!(di <= d)) d = di; /* NaN propagates */
+  }
+  free(x);
+  *distance = d;
+  return status;
+}
+
+/* Parameters just inside the face from a point where the parametrisation is
+ * singular: moved off every pole side and a little toward the middle. */
+static void nudge_inside(const hoc_cad_face *f, const double *uv, double *out) {
+  for (int d = 0; d < 2; ++d) {
+    double mid = 0.5 * (f->lo[d] + f->hi[d]), range = f->hi[d] - f->lo[d];
+    out[d] = uv[d] + 1e-5 * range * (mid > uv[d] ? 1.0 : (mid < uv[d] ? -1.0 : 0.0));
+  }
+}
+
+hoc_status hoc_mesh_slot_normals(const hoc_mesh *m, double *normal) {
+  const hoc_model *model = m->model;
+  int nf = model->n_faces;
+  /* slots grouped per face */
+  size_t *start, *order;
+  HOC_ALLOC(start, (size_t)nf + 1);
+  order = hoc_calloc(m->n_slots, sizeof *order);
+  size_t *fill = hoc_calloc((size_t)nf + 1, sizeof *fill);
+  double *du = NULL, *dv = NULL, *uv = NULL;
+  hoc_status status = HOC_OK;
+  if (!order || !fill) {
+    status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
+    goto done;
+  }
+  for (size_t s = 0; s < m->n_slots; ++s) start[m->slot_face[s] + 1]++;
+  for (int f = 0; f < nf; ++f) start[f + 1] += start[f];
+  memcpy(fill, start, ((size_t)nf + 1) * sizeof *fill);
+  for (size_t s = 0; s < m->n_slots; ++s) order[fill[m->slot_face[s]]++] = s;
+  size_t n_max = 0;
+  for (int f = 0; f < nf; ++f)
+    if (start[f + 1] - start[f] > n_max) n_max = start[f + 1] - start[f];
+  uv = hoc_calloc(2 * n_max, sizeof *uv);
+  du = hoc_calloc(3 * n_max, sizeof *du);
+  dv = hoc_calloc(3 * n_max, sizeof *dv);
+  if (!uv || !du || !dv) {
+    status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
+    goto done;
+  }
+  for (int f = 0; f < nf; ++f) {
+    size_t n = start[f + 1] - start[f];
+    if (!n) continue;
+    const hoc_cad_face *face = &model->faces[f];
+    double sign = m->face_orient[f] < 0 ? -1.0 : 1.0;
+    for (size_t k = 0; k < n; ++k) {
+      size_t s = order[start[f] + k];
+      if (m->slot_pole[s])
+        nudge_inside(face, m->slot_uv + 2 * s, uv + 2 * k);
+      else
+        memcpy(uv + 2 * k, m->slot_uv + 2 * s, 2 * sizeof *uv);
+    }
+    HOC_TRY_GOTO(hoc_cad_face_eval(model, f, n, uv, NULL, du, dv), done);
+    for (size_t k = 0; k < n; ++k) {
+      size_t s = order[start[f] + k];
+      double *a = du + 3 * k, *b = dv + 3 * k, c[3];
+      c[0] = a[1] * b[2] - a[2] * b[1];
+      c[1] = a[2] * b[0] - a[0] * b[2];
+      c[2] = a[0] * b[1] - a[1] * b[0];
+      double len = sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+      double scale = a[0] * a[0] + a[1] * a[1] + a[2] * a[2] + b[0] * b[0] + b[1] * b[1] +
+                     b[2] * b[2];
+      if (!(len > 1e-10 * scale)) {
+        /* singular point not flagged as a pole: look just inside the face */
+        double p[2], a2[3], b2[3];
+        nudge_inside(face, uv + 2 * k, p);
+        HOC_TRY_GOTO(hoc_cad_face_eval(model, f, 1, p, NULL, a2, b2), done);
+        c[0] = a2[1] * b2[2] - a2[2] * b2[1];
+        c[1] = a2[2] * b2[0] - a2[0] * b2[2];
+        c[2] = a2[0] * b2[1] - a2[1] * b2[0];
+        len = sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+      }
+      double inv = len > 0 ? sign / len : 0.0;
+      for (int d = 0; d < 3; ++d) normal[3 * s + d] = c[d] * inv;
+    }
+  }
+done:
+  free(start);
+  free(order);
+  free(fill);
+  free(uv);
+  free(du);
+  free(dv);
+  return status;
+}

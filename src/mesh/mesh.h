@@ -1,0 +1,107 @@
+/* The high-order surface mesh: nodes classified on CAD entities with their
+ * parametric coordinates, triangles of one order on CAD faces.
+ * SPDX-License-Identifier: GPL-2.0-or-later
+ */
+#ifndef HOC_MESH_H
+#define HOC_MESH_H
+
+#include "cad/cad.h"
+
+/* Node classification: the CAD entity a node lies on. */
+enum { HOC_ON_VERTEX = 0, HOC_ON_CURVE = 1, HOC_ON_FACE = 2 };
+
+/* A mesh "slot" is a (node, face) pair: the node seen from one face that
+ * uses it, with its parameters on that face. Face-interior nodes have one
+ * slot; nodes on curves and vertices have one per face around them. */
+
+struct hoc_mesh {
+  hoc_model *model; /* borrowed */
+  int order;        /* p */
+  hoc_nodeset nodeset;
+  int np;           /* nodes per element (p+1)(p+2)/2 */
+
+  size_t n_nodes;
+  double *xyz;          /* [n_nodes][3] position, always phi(param) of its entity */
+  double *param;        /* [n_nodes][2] (u,v) on its face, (t,0) on its curve, (0,0) on a vertex */
+  signed char *dim;     /* [n_nodes] HOC_ON_VERTEX/CURVE/FACE */
+  int *entity;          /* [n_nodes] index of the vertex/curve/face */
+
+  size_t n_elems;
+  size_t *conn;         /* [n_elems][np] node indices, gmsh ordering */
+  int *elem_face;       /* [n_elems] face index */
+  double *elem_uv;      /* [n_elems][np][2] the element's nodes on its face, unwrapped */
+  size_t *elem_slot;    /* [n_elems][np] slot of each element node */
+
+  size_t n_slots;
+  size_t *slot_node;    /* [n_slots] */
+  int *slot_face;       /* [n_slots] */
+  double *slot_uv;      /* [n_slots][2] parameters of the node on the face */
+  unsigned char *slot_pole; /* [n_slots] bit 0: u is arbitrary here (phi_u = 0), bit 1: v is */
+
+  /* 1D elements on CAD curves (the curve edges of the triangles) */
+  size_t n_lines;
+  size_t *line_conn;    /* [n_lines][p+1] gmsh line ordering: end0, end1, interior from end0 */
+  int *line_curve;      /* [n_lines] curve index */
+  double *line_t;       /* [n_lines][2] curve parameter at end0 and end1, unwrapped along the line */
+
+  signed char *face_orient; /* [n_faces] +1 if element normals follow phi_u x phi_v, -1 if
+                               opposite, 0 if the face has no elements */
+  int n_failed_faces;
+  int *failed_faces;        /* [n_failed_faces] face indices the mesher could not mesh */
+};
+
+/** Input of hoc_mesh_assemble: a triangulation with classified nodes, as
+ *  produced by a mesher or read from a file. Arrays are borrowed. */
+typedef struct hoc_mesh_source {
+  int order;
+  hoc_nodeset nodeset;
+  size_t n_nodes;
+  const double *xyz;         /* [n][3] */
+  const double *param;       /* [n][2] or NULL: parameters on the node's entity */
+  const unsigned char *has_param; /* [n] or NULL (all valid if param != NULL) */
+  const signed char *dim;    /* [n] */
+  const int *entity;         /* [n] entity index */
+  size_t n_elems;
+  const size_t *conn;        /* [n_elems][np] */
+  const int *elem_face;      /* [n_elems] */
+  size_t n_lines;            /* may be 0: curve edges are then inferred */
+  const size_t *line_conn;   /* [n_lines][p+1] */
+  const int *line_curve;     /* [n_lines] */
+  const size_t *node_tag;    /* [n] node labels for messages (file tags), or NULL */
+} hoc_mesh_source;
+
+/** Build a mesh from a triangulation: locate nodes without parameters on
+ *  their entities, reparametrise curve and vertex nodes on the faces around
+ *  them (slots), unwrap each element's parameters across seams, give pole
+ *  nodes a usable parameter per element, orient the faces from the
+ *  elements, and recompute every node position from its parameters.
+ *  Fails with HOC_ERR_MISMATCH when a node is farther than `tolerance`
+ *  (relative to the model's diagonal) from its entity. */
+hoc_status hoc_mesh_assemble(hoc_model *model, const hoc_mesh_source *src, double tolerance,
+                             hoc_mesh **mesh);
+
+/** Allocate an empty mesh with its arrays for the given sizes. */
+hoc_status hoc_mesh_alloc(hoc_model *model, int order, size_t n_nodes, size_t n_elems,
+                          hoc_mesh **mesh);
+
+/** The same elements with the nodes of another reference distribution:
+ *  each element's parametric map (t on curve edges, (u,v) inside) evaluated
+ *  at the new set's reference nodes, mapped onto the CAD. */
+hoc_status hoc_mesh_convert_nodeset(const hoc_mesh *mesh, hoc_nodeset set, hoc_mesh **out);
+
+/** Evaluate node positions from parameters (all nodes). */
+hoc_status hoc_mesh_update_xyz(hoc_mesh *mesh);
+
+/** Unit normals at every slot (oriented by face_orient, NaN-free: at a pole
+ *  the normal comes from the nearby interior of the face). normal[n_slots][3]. */
+hoc_status hoc_mesh_slot_normals(const hoc_mesh *mesh, double *normal);
+
+/** Structured triangulation of an analytic model's single face for tests:
+ *  nu x nv cells of its parameter domain, split into triangles, order 1. */
+hoc_status hoc_mesh_grid_linear(hoc_model *model, int nu, int nv, hoc_mesh **mesh);
+
+/** Linear surface mesh of the current gmsh model (mesh/linear_gmsh.c). */
+hoc_status hoc_mesh_generate_linear_gmsh(hoc_model *model, const hoc_linear_options *options,
+                                         hoc_mesh **mesh);
+
+#endif

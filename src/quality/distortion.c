@@ -1,0 +1,202 @@
+/* The element kernel: pointwise distortion (Table 1), element quality
+ * (Definitions 1-2) and least-squares residuals with their derivatives.
+ * One definition of eta serves the report and the optimiser.
+ * SPDX-License-Identifier: GPL-2.0-or-later */
+#include "quality/quality.h"
+
+#include <math.h>
+#include <string.h>
+
+static inline void cross(const double *a, const double *b, double *c) {
+  c[0] = a[1] * b[2] - a[2] * b[1];
+  c[1] = a[2] * b[0] - a[0] * b[2];
+  c[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+static inline double dot(const double *a, const double *b) {
+  return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+double hoc_distortion_point(hoc_measure measure, const double a1[3], const double a2[3],
+                            const double n[3], double delta, double *sigma, double *g1,
+                            double *g2) {
+  double c[3];
+  cross(a1, a2, c);
+  double cl = sqrt(dot(c, c));
+  double gamma = dot(c, n) > 0 ? 1.0 : -1.0; /* orientation of T's basis from the CAD normal */
+  double sig = gamma * cl;                   /* sigma = det T(D phi) */
+  if (sigma) *sigma = sig;
+  double g11 = dot(a1, a1), g22 = dot(a2, a2), g12 = dot(a1, a2), F = g11 + g22; /* F = |S|^2 */
+  double s, ds; /* sigma_delta and its derivative in sigma */
+  if (delta > 0) {
+    double root = sqrt(sig * sig + 4 * delta * delta);
+    s = sig >= 0 ? 0.5 * (sig + root) : 2 * delta * delta / (root - sig); /* no cancellation */
+    ds = s / root;
+  } else {
+    if (!(sig > 0)) {
+      if (g1) memset(g1, 0, 3 * sizeof *g1);
+      if (g2) memset(g2, 0, 3 * sizeof *g2);
+      return INFINITY;
+    }
+    s = sig;
+    ds = 1;
+  }
+  double eta, deta_ds;
+  double dA1[3], dA2[3]; /* d eta / d a at fixed sigma */
+  if (measure == HOC_MEASURE_ODDY) {
+    /* eta = (3/2) (|S^T S|^2 - |S|^4 / 3) / sigma^2 */
+    double H = g11 * g11 + 2 * g12 * g12 + g22 * g22 - F * F / 3;
+    double inv2 = 1 / (s * s);
+    eta = 1.5 * H * inv2;
+    deta_ds = -3 * H * inv2 / s;
+    double c11 = 1.5 * inv2 * (4 * g11 - 4 * F / 3), c12 = 1.5 * inv2 * 4 * g12,
+           c22 = 1.5 * inv2 * (4 * g22 - 4 * F / 3);
+    for (int k = 0; k < 3; ++k) {
+      dA1[k] = c11 * a1[k] + c12 * a2[k];
+      dA2[k] = c12 * a1[k] + c22 * a2[k];
+    }
+  } else {
+    /* eta = |S|^2 / (2 sigma) */
+    eta = F / (2 * s);
+    deta_ds = -F / (2 * s * s);
+    for (int k = 0; k < 3; ++k) {
+      dA1[k] = a1[k] / s;
+      dA2[k] = a2[k] / s;
+    }
+  }
+  if (g1 || g2) {
+    /* d sigma / d a1 = a2 x c^, d sigma / d a2 = c^ x a1, c^ the unit normal of
+     * the element turned by gamma (the reference normal where a1 x a2 = 0) */
+    double chat[3];
+    if (cl > 0) {
+      for (int k = 0; k < 3; ++k) chat[k] = gamma * c[k] / cl;
+    } else {
+      double nl = sqrt(dot(n, n));
+      for (int k = 0; k < 3; ++k) chat[k] = nl > 0 ? n[k] / nl : 0;
+    }
+    double ds1[3], ds2[3];
+    cross(a2, chat, ds1);
+    cross(chat, a1, ds2);
+    double f = deta_ds * ds;
+    for (int k = 0; k < 3; ++k) {
+      if (g1) g1[k] = dA1[k] + f * ds1[k];
+      if (g2) g2[k] = dA2[k] + f * ds2[k];
+    }
+  }
+  return eta;
+}
+
+/* Columns of D phi and the interpolated normal at one point from the node
+ * data: g[np][2] gradients, nv[np] basis values (NULL: the normal of node
+ * `node`). */
+static inline void jacobian_at(int np, const double *x, const double *g, double *a1,
+                               double *a2) {
+  a1[0] = a1[1] = a1[2] = a2[0] = a2[1] = a2[2] = 0;
+  for (int i = 0; i < np; ++i) {
+    double gx = g[2 * i], gy = g[2 * i + 1];
+    const double *xi = x + 3 * i;
+    a1[0] += gx * xi[0], a1[1] += gx * xi[1], a1[2] += gx * xi[2];
+    a2[0] += gy * xi[0], a2[1] += gy * xi[1], a2[2] += gy * xi[2];
+  }
+}
+
+static inline void normal_at(int np, const double *n, const double *N, double *nq) {
+  nq[0] = nq[1] = nq[2] = 0;
+  for (int i = 0; i < np; ++i) {
+    nq[0] += N[i] * n[3 * i], nq[1] += N[i] * n[3 * i + 1], nq[2] += N[i] * n[3 * i + 2];
+  }
+}
+
+double hoc_element_quality(const hoc_quality_tables *t, hoc_measure measure, const double *x,
+                           const double *n, double *eta_out, double *min_sigma) {
+  int np = t->np;
+  double sum = 0, smin = INFINITY;
+  int tangled = 0;
+  for (int q = 0; q < t->nq; ++q) {
+    double a1[3], a2[3], nq[3], sig;
+    jacobian_at(np, x, t->G + 2 * (size_t)q * np, a1, a2);
+    normal_at(np, n, t->N + (size_t)q * np, nq);
+    double e = hoc_distortion_point(measure, a1, a2, nq, 0.0, &sig, NULL, NULL);
+    double rel = sig / (dot(a1, a1) + dot(a2, a2));
+    if (!(rel > 0)) tangled = 1;
+    if (!(rel >= smin)) smin = rel;
+    sum += t->w[q] * e * e;
+  }
+  for (int j = 0; j < np; ++j) {
+    double a1[3], a2[3], c[3];
+    jacobian_at(np, x, t->Gn + 2 * (size_t)j * np, a1, a2);
+    cross(a1, a2, c);
+    double cl = sqrt(dot(c, c));
+    double sig = dot(c, n + 3 * j) > 0 ? cl : -cl;
+    double rel = sig / (dot(a1, a1) + dot(a2, a2));
+    if (!(rel > 0)) tangled = 1;
+    if (!(rel >= smin)) smin = rel;
+  }
+  double eta = tangled ? INFINITY : sqrt(sum);
+  if (eta_out) *eta_out = eta;
+  if (min_sigma) *min_sigma = smin;
+  return tangled || !isfinite(eta) ? 0.0 : 1.0 / eta;
+}
+
+double hoc_element_residuals(const hoc_quality_tables *t, hoc_measure measure, const double *x,
+                             const double *n, double delta, double *r, double *J) {
+  int np = t->np;
+  double smin = INFINITY;
+  for (int q = 0; q < t->nq; ++q) {
+    double a1[3], a2[3], nq[3], sig, g1[3], g2[3];
+    const double *G = t->G + 2 * (size_t)q * np;
+    jacobian_at(np, x, G, a1, a2);
+    normal_at(np, n, t->N + (size_t)q * np, nq);
+    double e = hoc_distortion_point(measure, a1, a2, nq, delta, &sig, J ? g1 : NULL,
+                                    J ? g2 : NULL);
+    double rel = sig / (dot(a1, a1) + dot(a2, a2));
+    if (!(rel >= smin)) smin = rel;
+    double sw = sqrt(t->w[q]);
+    r[q] = sw * (e - 1);
+    if (J) {
+      double *Jq = J + 3 * (size_t)q * np;
+      for (int i = 0; i < np; ++i)
+        for (int k = 0; k < 3; ++k) Jq[3 * i + k] = sw * (g1[k] * G[2 * i] + g2[k] * G[2 * i + 1]);
+    }
+  }
+  return smin;
+}
+
+double hoc_element_residuals_node(const hoc_quality_tables *t, hoc_measure measure,
+                                  const double *x, const double *n, double delta, int node,
+                                  double *r, double *Jk) {
+  int np = t->np;
+  double smin = INFINITY;
+  for (int q = 0; q < t->nq; ++q) {
+    double a1[3], a2[3], nq[3], sig, g1[3], g2[3];
+    const double *G = t->G + 2 * (size_t)q * np;
+    jacobian_at(np, x, G, a1, a2);
+    normal_at(np, n, t->N + (size_t)q * np, nq);
+    double e = hoc_distortion_point(measure, a1, a2, nq, delta, &sig, g1, g2);
+    double rel = sig / (dot(a1, a1) + dot(a2, a2));
+    if (!(rel >= smin)) smin = rel;
+    double sw = sqrt(t->w[q]);
+    r[q] = sw * (e - 1);
+    double gx = G[2 * node], gy = G[2 * node + 1];
+    for (int k = 0; k < 3; ++k) Jk[3 * q + k] = sw * (g1[k] * gx + g2[k] * gy);
+  }
+  return smin;
+}
+
+int hoc_element_tangled(const hoc_quality_tables *t, const double *x, const double *n) {
+  int np = t->np;
+  for (int q = 0; q < t->nq; ++q) {
+    double a1[3], a2[3], nq[3], c[3];
+    jacobian_at(np, x, t->G + 2 * (size_t)q * np, a1, a2);
+    normal_at(np, n, t->N + (size_t)q * np, nq);
+    cross(a1, a2, c);
+    if (!(dot(c, nq) > 0) || !(dot(c, c) > 0)) return 1;
+  }
+  for (int j = 0; j < np; ++j) {
+    double a1[3], a2[3], c[3];
+    jacobian_at(np, x, t->Gn + 2 * (size_t)j * np, a1, a2);
+    cross(a1, a2, c);
+    if (!(dot(c, n + 3 * j) > 0) || !(dot(c, c) > 0)) return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,90 @@
+/* Jacobian-based distortion of high-order surface triangles: the seed's
+ * Table 1 (shape, Oddy), Definition 1 (L2 average over the ideal element)
+ * and Definition 2 (surfaces, through the tangent-plane embedding T).
+ * SPDX-License-Identifier: GPL-2.0-or-later
+ *
+ * Notation. Reference triangle t_R: (0,0), (1,0), (0,1), coordinates xi.
+ * Ideal element t_I: the equilateral triangle (0,0), (1,0), (1/2, sqrt(3)/2)
+ * with the same node distribution, so phi_I(xi) = W xi is affine with
+ * W = [1 1/2; 0 sqrt(3)/2]. The physical element is x(xi) = sum_i x_i N_i(xi)
+ * and D phi = D phi_R W^{-1} (3 x 2), columns a1, a2.
+ *
+ * Surfaces (Definition 2): T maps D phi to S = M D phi with M = [e1; gamma e2]
+ * from Gram-Schmidt on a1, a2, gamma = +-1 so that the basis turns like the
+ * CAD face's normal n. Then S^T S = D phi^T D phi and
+ * sigma = det S = gamma |a1 x a2|, gamma = sign((a1 x a2) . n),
+ * so eta needs only the Gram matrix of a1, a2 and the signed area.
+ *
+ * The reference normal n at a quadrature point is the Lagrange interpolant of
+ * the CAD face's unit normals at the element's nodes (exact to O(h^{p+1})
+ * on smooth faces; only its side of the tangent plane matters).
+ */
+#ifndef HOC_QUALITY_H
+#define HOC_QUALITY_H
+
+#include "core/error.h"
+
+/** Tables of one (order, node set): basis values and ideal-space gradients
+ *  at the quadrature points and at the nodes. Shared, read-only. */
+typedef struct hoc_quality_tables {
+  int p, np, nq, degree;
+  hoc_nodeset set;
+  double *w;  /* [nq] quadrature weights normalised to sum 1 (mean over t_I) */
+  double *N;  /* [nq][np] N_i at the quadrature points */
+  double *G;  /* [nq][np][2] grad_{x~} N_i = W^{-T} grad_xi N_i at the quadrature points */
+  double *Gn; /* [np][np][2] the same at the nodes (row j: node j) */
+  double *rs; /* [np][2] reference coordinates of the nodes */
+} hoc_quality_tables;
+
+/** Quadrature degree used for order p (see docs/quality.md for why). */
+int hoc_quality_degree(int p);
+
+/** Tables for (p, set), built on first use and cached (thread-safe). */
+hoc_status hoc_quality_tables_get(int p, hoc_nodeset set, const hoc_quality_tables **tables);
+
+/** Pointwise distortion eta(S) of Table 1 for d = 2, with the regularised
+ *  determinant sigma_delta = (sigma + sqrt(sigma^2 + 4 delta^2)) / 2 (delta = 0:
+ *  eta = +inf where sigma <= 0).
+ *  @param[in]  a1, a2  columns of D phi (3)
+ *  @param[in]  n       reference normal (3, any length > 0)
+ *  @param[in]  delta   regularisation >= 0
+ *  @param[out] sigma   signed area sigma = gamma |a1 x a2| (may be NULL)
+ *  @param[out] g1, g2  d eta / d a1, d eta / d a2 (3 each), or NULL
+ *  @return eta (>= 1 when sigma > 0) */
+double hoc_distortion_point(hoc_measure measure, const double a1[3], const double a2[3],
+                            const double n[3], double delta, double *sigma, double *g1,
+                            double *g2);
+
+/** Quality of one element (Definition 2 with delta = 0).
+ *  @param[in] x  [np][3] node positions
+ *  @param[in] n  [np][3] unit CAD normals at the nodes (oriented)
+ *  @param[out] eta  element distortion (+inf if tangled)
+ *  @param[out] min_sigma  smallest sigma / |D phi|^2 over quadrature points
+ *                         and nodes (scale-free; <= 0 means tangled)
+ *  @return q = 1/eta, 0 if tangled */
+double hoc_element_quality(const hoc_quality_tables *t, hoc_measure measure, const double *x,
+                           const double *n, double *eta, double *min_sigma);
+
+/** Residuals of the least-squares objective of one element,
+ *  r_q = sqrt(w_q) (eta(x~_q) - 1), and their derivatives.
+ *  @param[out] r  [nq]
+ *  @param[out] J  [nq][np][3] d r_q / d x_i, or NULL
+ *  @return smallest sigma / |D phi|^2 over the quadrature points */
+double hoc_element_residuals(const hoc_quality_tables *t, hoc_measure measure, const double *x,
+                             const double *n, double delta, double *r, double *J);
+
+/** Residuals of one element and their derivatives with respect to one of
+ *  its nodes only (the local optimiser's need).
+ *  @param[in]  node  local index of the node (0..np-1)
+ *  @param[out] r     [nq]
+ *  @param[out] Jk    [nq][3] d r_q / d x_node
+ *  @return smallest sigma / |D phi|^2 over the quadrature points */
+double hoc_element_residuals_node(const hoc_quality_tables *t, hoc_measure measure,
+                                  const double *x, const double *n, double delta, int node,
+                                  double *r, double *Jk);
+
+/** Tangled test of Definition 2 (delta = 0): 1 if sigma <= 0 at a
+ *  quadrature point or a node. Same test as hoc_element_quality. */
+int hoc_element_tangled(const hoc_quality_tables *t, const double *x, const double *n);
+
+#endif

@@ -1,0 +1,95 @@
+/* Basis and quadrature tables of the quality kernel, one per (order, node
+ * set), built once and shared.
+ * SPDX-License-Identifier: GPL-2.0-or-later */
+#include "basis/basis.h"
+#include "quality/quality.h"
+
+#include <math.h>
+#include <pthread.h>
+#include <stdlib.h>
+
+int hoc_quality_degree(int p) {
+  /* see docs/quality.md: |D phi|^2 has degree 2(p-1); eta^2 of a curved
+   * element is a rational function, integrated to within 1e-4 of its
+   * converged value on real meshes by degree 2p + 2 */
+  return 2 * p + 2;
+}
+
+static pthread_mutex_t cache_lock = PTHREAD_MUTEX_INITIALIZER;
+static hoc_quality_tables *cache[HOC_MAX_ORDER + 1][3];
+
+static void tables_free(hoc_quality_tables *t) {
+  if (!t) return;
+  free(t->w);
+  free(t->N);
+  free(t->G);
+  free(t->Gn);
+  free(t->rs);
+  free(t);
+}
+
+/* grad_{x~} N = W^{-T} grad_xi N with W = [1 1/2; 0 sqrt(3)/2] */
+static void to_ideal(size_t n, const double *dN, double *G) {
+  const double inv_sqrt3 = 0.57735026918962576451;
+  for (size_t k = 0; k < n; ++k) {
+    double dr = dN[2 * k], ds = dN[2 * k + 1];
+    G[2 * k] = dr;
+    G[2 * k + 1] = (2 * ds - dr) * inv_sqrt3;
+  }
+}
+
+static hoc_status build(int p, hoc_nodeset set, hoc_quality_tables **out) {
+  hoc_quality_tables *t;
+  HOC_ALLOC(t, 1);
+  hoc_status status = HOC_OK;
+  hoc_quadrature quad = {0};
+  hoc_lagrange *basis = NULL;
+  double *dN = NULL;
+  t->p = p;
+  t->set = set;
+  t->np = hoc_tri_num_nodes(p);
+  t->degree = hoc_quality_degree(p);
+  size_t np = (size_t)t->np;
+  HOC_ALLOC_GOTO(t->rs, 2 * np, fail);
+  HOC_TRY_GOTO(hoc_tri_nodes(p, set, t->rs), fail);
+  HOC_TRY_GOTO(hoc_quadrature_triangle(t->degree, &quad), fail);
+  t->nq = quad.n;
+  size_t nq = (size_t)quad.n;
+  HOC_ALLOC_GOTO(t->w, nq, fail);
+  HOC_ALLOC_GOTO(t->N, nq * np, fail);
+  HOC_ALLOC_GOTO(t->G, 2 * nq * np, fail);
+  HOC_ALLOC_GOTO(t->Gn, 2 * np * np, fail);
+  HOC_ALLOC_GOTO(dN, 2 * (nq > np ? nq : np) * np, fail);
+  double wsum = 0;
+  for (size_t q = 0; q < nq; ++q) wsum += quad.w[q];
+  for (size_t q = 0; q < nq; ++q) t->w[q] = quad.w[q] / wsum;
+  HOC_TRY_GOTO(hoc_lagrange_create(p, t->rs, &basis), fail);
+  HOC_TRY_GOTO(hoc_lagrange_eval(basis, quad.n, quad.rs, t->N, dN), fail);
+  to_ideal(nq * np, dN, t->G);
+  HOC_TRY_GOTO(hoc_lagrange_eval(basis, t->np, t->rs, NULL, dN), fail);
+  to_ideal(np * np, dN, t->Gn);
+  hoc_lagrange_destroy(&basis);
+  hoc_quadrature_free(&quad);
+  free(dN);
+  *out = t;
+  return HOC_OK;
+fail:
+  hoc_lagrange_destroy(&basis);
+  hoc_quadrature_free(&quad);
+  free(dN);
+  tables_free(t);
+  return status;
+}
+
+hoc_status hoc_quality_tables_get(int p, hoc_nodeset set, const hoc_quality_tables **tables) {
+  HOC_CHECK(p >= 1 && p <= HOC_MAX_ORDER, HOC_ERR_ARGUMENT, "order %d out of range 1..%d", p,
+            HOC_MAX_ORDER);
+  HOC_CHECK(set == HOC_NODES_EQUISPACED || set == HOC_NODES_FEKETE || set == HOC_NODES_WARP_BLEND,
+            HOC_ERR_ARGUMENT, "unknown node set %d", (int)set);
+  pthread_mutex_lock(&cache_lock);
+  hoc_status status = HOC_OK;
+  if (!cache[p][set]) status = build(p, set, &cache[p][set]);
+  *tables = cache[p][set];
+  pthread_mutex_unlock(&cache_lock);
+  return status;
+}

@@ -1,0 +1,281 @@
+/* The distortion measures against closed forms: the ideal element, linear
+ * triangles, invariances, Definition 2 = Definition 1 on a plane, and the
+ * analytic derivatives against finite differences.
+ * SPDX-License-Identifier: GPL-2.0-or-later */
+#include "basis/basis.h"
+#include "quality/quality.h"
+#include "test_util.h"
+
+#include <string.h>
+
+static const double SQRT3 = 1.7320508075688772935;
+
+static unsigned long long rng_state = 88172645463325252ULL;
+static double rnd(void) { /* xorshift64 in [0, 1) */
+  rng_state ^= rng_state << 13;
+  rng_state ^= rng_state >> 7;
+  rng_state ^= rng_state << 17;
+  return (double)(rng_state >> 11) / 9007199254740992.0;
+}
+
+/* Node positions of the element x = A * (ideal coordinates) + b in 3D, with
+ * ideal coordinates W rs. A: 3x2 row-major. */
+static void affine_element(const hoc_quality_tables *t, const double *A, const double *b, double *x) {
+  for (int i = 0; i < t->np; ++i) {
+    double r = t->rs[2 * i], s = t->rs[2 * i + 1];
+    double X = r + 0.5 * s, Y = 0.5 * SQRT3 * s; /* W rs */
+    for (int k = 0; k < 3; ++k) x[3 * i + k] = A[2 * k] * X + A[2 * k + 1] * Y + (b ? b[k] : 0);
+  }
+}
+
+static void constant_normals(int np, const double *n, double *out) {
+  for (int i = 0; i < np; ++i) memcpy(out + 3 * i, n, 3 * sizeof *n);
+}
+
+static void random_rotation(double R[9]) {
+  /* Gram-Schmidt on random vectors */
+  double a[3] = {rnd() - 0.5, rnd() - 0.5, rnd() - 0.5}, b[3] = {rnd() - 0.5, rnd() - 0.5, rnd() - 0.5};
+  double la = sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+  for (int k = 0; k < 3; ++k) a[k] /= la;
+  double d = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+  for (int k = 0; k < 3; ++k) b[k] -= d * a[k];
+  double lb = sqrt(b[0] * b[0] + b[1] * b[1] + b[2] * b[2]);
+  for (int k = 0; k < 3; ++k) b[k] /= lb;
+  double c[3] = {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+  for (int k = 0; k < 3; ++k) R[3 * k] = a[k], R[3 * k + 1] = b[k], R[3 * k + 2] = c[k];
+}
+
+static void apply(const double R[9], double s, const double *in, double *out) {
+  double y[3];
+  for (int k = 0; k < 3; ++k) y[k] = s * (R[3 * k] * in[0] + R[3 * k + 1] * in[1] + R[3 * k + 2] * in[2]);
+  memcpy(out, y, sizeof y);
+}
+
+/* The ideal element has eta = 1 for every order, node set and measure. */
+static void test_ideal(void) {
+  const double A[6] = {1, 0, 0, 1, 0, 0}, n[3] = {0, 0, 1};
+  for (int set = 0; set < 3; ++set)
+    for (int p = 1; p <= HOC_MAX_ORDER; ++p) {
+      const hoc_quality_tables *t;
+      CHECK_OK(hoc_quality_tables_get(p, (hoc_nodeset)set, &t));
+      double *x = calloc(3 * (size_t)t->np, sizeof *x), *nn = calloc(3 * (size_t)t->np, sizeof *nn);
+      affine_element(t, A, NULL, x);
+      constant_normals(t->np, n, nn);
+      for (int m = 0; m < 2; ++m) {
+        double eta, smin;
+        double q = hoc_element_quality(t, (hoc_measure)m, x, nn, &eta, &smin);
+        CHECK_NEAR(q, 1.0, 1e-11 * p * p);
+        CHECK_NEAR(eta, 1.0, 1e-11 * p * p);
+      }
+      free(x);
+      free(nn);
+    }
+}
+
+/* Linear triangles: shape q = 4 sqrt(3) area / sum of squared edges; the right
+ * isosceles triangle has shape q = sqrt(3)/2 and Oddy eta = 7/3. */
+static void test_linear_closed_forms(void) {
+  const hoc_quality_tables *t;
+  CHECK_OK(hoc_quality_tables_get(1, HOC_NODES_EQUISPACED, &t));
+  double n[9] = {0, 0, 1, 0, 0, 1, 0, 0, 1};
+  double x[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0}, eta;
+  CHECK_NEAR(hoc_element_quality(t, HOC_MEASURE_SHAPE, x, n, &eta, NULL), SQRT3 / 2, 1e-14);
+  CHECK_NEAR(hoc_element_quality(t, HOC_MEASURE_ODDY, x, n, &eta, NULL), 3.0 / 7.0, 1e-14);
+  for (int trial = 0; trial < 200; ++trial) {
+    double y[9];
+    for (int k = 0; k < 9; ++k) y[k] = k % 3 == 2 ? 0 : rnd();
+    double e1[2] = {y[3] - y[0], y[4] - y[1]}, e2[2] = {y[6] - y[0], y[7] - y[1]},
+           e3[2] = {y[6] - y[3], y[7] - y[4]};
+    double area = 0.5 * (e1[0] * e2[1] - e1[1] * e2[0]);
+    double l2 = e1[0] * e1[0] + e1[1] * e1[1] + e2[0] * e2[0] + e2[1] * e2[1] + e3[0] * e3[0] +
+                e3[1] * e3[1];
+    double q = hoc_element_quality(t, HOC_MEASURE_SHAPE, y, n, &eta, NULL);
+    if (area > 1e-3) {
+      CHECK_NEAR(q, 4 * SQRT3 * area / l2, 1e-12);
+    } else if (area < -1e-3) {
+      CHECK(q == 0.0); /* inverted: tangled */
+      CHECK(isinf(eta));
+    }
+    /* Oddy for a linear triangle: (3/2)(|S^T S|^2 - |S|^4/3)/sigma^2 >= 1 */
+    double qo = hoc_element_quality(t, HOC_MEASURE_ODDY, y, n, &eta, NULL);
+    if (area > 1e-3) CHECK(qo > 0 && qo <= 1 + 1e-14);
+  }
+  /* the same triangle seen from below is inverted */
+  double down[9] = {0, 0, -1, 0, 0, -1, 0, 0, -1};
+  CHECK(hoc_element_quality(t, HOC_MEASURE_SHAPE, x, down, &eta, NULL) == 0.0);
+  /* a degenerate (zero-area) triangle is tangled */
+  double flat[9] = {0, 0, 0, 1, 0, 0, 2, 0, 0};
+  CHECK(hoc_element_quality(t, HOC_MEASURE_SHAPE, flat, n, &eta, NULL) == 0.0);
+}
+
+/* Curved element: the ideal element with interior/edge nodes moved. */
+static void curved_element(const hoc_quality_tables *t, double amp, double *x) {
+  const double A[6] = {1, 0, 0, 1, 0, 0};
+  affine_element(t, A, NULL, x);
+  for (int i = 3; i < t->np; ++i)
+    for (int k = 0; k < 3; ++k) x[3 * i + k] += amp * (rnd() - 0.5);
+}
+
+/* eta is invariant under rotation, scaling and translation (with the normals
+ * rotated too). */
+static void test_invariance(void) {
+  for (int p = 1; p <= 6; ++p) {
+    const hoc_quality_tables *t;
+    CHECK_OK(hoc_quality_tables_get(p, HOC_NODES_EQUISPACED, &t));
+    size_t np = (size_t)t->np;
+    double *x = calloc(3 * np, sizeof *x), *y = calloc(3 * np, sizeof *y),
+           *n = calloc(3 * np, sizeof *n), *m = calloc(3 * np, sizeof *m);
+    for (int trial = 0; trial < 10; ++trial) {
+      curved_element(t, 0.15 / p, x);
+      for (size_t i = 0; i < np; ++i) x[3 * i + 2] *= 0.3; /* a little out of plane */
+      double up[3] = {0.1, -0.2, 1};
+      constant_normals(t->np, up, n);
+      double R[9], s = 0.001 + 100 * rnd(), b[3] = {rnd(), rnd(), rnd()};
+      random_rotation(R);
+      for (size_t i = 0; i < np; ++i) {
+        apply(R, s, x + 3 * i, y + 3 * i);
+        for (int k = 0; k < 3; ++k) y[3 * i + k] += b[k];
+        apply(R, 1, n + 3 * i, m + 3 * i);
+      }
+      for (int meas = 0; meas < 2; ++meas) {
+        double e1, e2;
+        double q1 = hoc_element_quality(t, (hoc_measure)meas, x, n, &e1, NULL);
+        double q2 = hoc_element_quality(t, (hoc_measure)meas, y, m, &e2, NULL);
+        CHECK_NEAR(q1, q2, 1e-12);
+      }
+    }
+    free(x);
+    free(y);
+    free(n);
+    free(m);
+  }
+}
+
+/* Definition 2 with the normal e_z equals Definition 1 computed in 2D. */
+static void test_planar_definition1(void) {
+  for (int p = 1; p <= 8; ++p) {
+    const hoc_quality_tables *t;
+    CHECK_OK(hoc_quality_tables_get(p, HOC_NODES_FEKETE, &t));
+    size_t np = (size_t)t->np;
+    double *x = calloc(3 * np, sizeof *x), *n = calloc(3 * np, sizeof *n);
+    double ez[3] = {0, 0, 1};
+    constant_normals(t->np, ez, n);
+    for (int trial = 0; trial < 5; ++trial) {
+      curved_element(t, 0.1 / p, x);
+      for (size_t i = 0; i < np; ++i) x[3 * i + 2] = 0;
+      for (int meas = 0; meas < 2; ++meas) {
+        /* Definition 1 in 2D: S = sum x_i (x) grad N_i, square */
+        double sum = 0;
+        int tangled = 0;
+        for (int q = 0; q < t->nq; ++q) {
+          double S[4] = {0, 0, 0, 0};
+          for (size_t i = 0; i < np; ++i)
+            for (int r = 0; r < 2; ++r)
+              for (int c = 0; c < 2; ++c) S[2 * r + c] += x[3 * i + r] * t->G[2 * ((size_t)q * np + i) + c];
+          double sig = S[0] * S[3] - S[1] * S[2];
+          double F = S[0] * S[0] + S[1] * S[1] + S[2] * S[2] + S[3] * S[3];
+          double eta;
+          if (meas == 0) {
+            eta = F / (2 * sig);
+          } else {
+            double g11 = S[0] * S[0] + S[2] * S[2], g22 = S[1] * S[1] + S[3] * S[3],
+                   g12 = S[0] * S[1] + S[2] * S[3];
+            eta = 1.5 * (g11 * g11 + 2 * g12 * g12 + g22 * g22 - F * F / 3) / (sig * sig);
+          }
+          if (sig <= 0) tangled = 1;
+          sum += t->w[q] * eta * eta;
+        }
+        double eta2, q2 = hoc_element_quality(t, (hoc_measure)meas, x, n, &eta2, NULL);
+        if (!tangled) CHECK_NEAR(q2, 1 / sqrt(sum), 1e-12);
+      }
+    }
+    free(x);
+    free(n);
+  }
+}
+
+/* Analytic derivatives of the residuals against central differences. */
+static void test_gradients(void) {
+  for (int p = 1; p <= 5; ++p) {
+    const hoc_quality_tables *t;
+    CHECK_OK(hoc_quality_tables_get(p, HOC_NODES_EQUISPACED, &t));
+    size_t np = (size_t)t->np, nq = (size_t)t->nq;
+    double *x = calloc(3 * np, sizeof *x), *n = calloc(3 * np, sizeof *n);
+    double *r = calloc(nq, sizeof *r), *rp = calloc(nq, sizeof *rp), *rm = calloc(nq, sizeof *rm);
+    double *J = calloc(nq * np * 3, sizeof *J);
+    for (int trial = 0; trial < 6; ++trial) {
+      curved_element(t, 0.3 / p, x);
+      for (size_t i = 0; i < np; ++i) {
+        double nz[3] = {0.05 * (rnd() - 0.5), 0.05 * (rnd() - 0.5), 1};
+        memcpy(n + 3 * i, nz, sizeof nz);
+      }
+      if (trial >= 3) { /* fold the element: tangled, regularised */
+        double tmp[3];
+        memcpy(tmp, x + 3, sizeof tmp);
+        memcpy(x + 3, x + 6, sizeof tmp);
+        memcpy(x + 6, tmp, sizeof tmp);
+      }
+      for (int meas = 0; meas < 2; ++meas) {
+        double delta = trial >= 3 ? 0.05 : (trial == 2 ? 1e-3 : 0.0);
+        double smin = hoc_element_residuals(t, (hoc_measure)meas, x, n, delta, r, J);
+        if (delta == 0 && !(smin > 0)) continue;
+        double err = 0, scale = 0;
+        for (size_t i = 0; i < np; ++i)
+          for (int k = 0; k < 3; ++k) {
+            double h = 1e-6, save = x[3 * i + k];
+            x[3 * i + k] = save + h;
+            hoc_element_residuals(t, (hoc_measure)meas, x, n, delta, rp, NULL);
+            x[3 * i + k] = save - h;
+            hoc_element_residuals(t, (hoc_measure)meas, x, n, delta, rm, NULL);
+            x[3 * i + k] = save;
+            for (size_t q = 0; q < nq; ++q) {
+              double fd = (rp[q] - rm[q]) / (2 * h), an = J[(q * np + i) * 3 + k];
+              err = fmax(err, fabs(fd - an));
+              scale = fmax(scale, fabs(an));
+            }
+          }
+        CHECK(err <= 1e-6 * (1 + scale));
+        if (!(err <= 1e-6 * (1 + scale)))
+          fprintf(stderr, "  p=%d measure=%d delta=%g: gradient error %g (scale %g)\n", p, meas,
+                  delta, err, scale);
+      }
+    }
+    free(x);
+    free(n);
+    free(r);
+    free(rp);
+    free(rm);
+    free(J);
+  }
+}
+
+/* The regularised determinant: sigma_delta -> sigma as delta -> 0 (sigma > 0),
+ * and eta stays finite and positive for tangled points when delta > 0. */
+static void test_regularisation(void) {
+  double a1[3] = {1, 0, 0}, a2[3] = {0.5, 0.8, 0}, n[3] = {0, 0, 1}, sig;
+  double e0 = hoc_distortion_point(HOC_MEASURE_SHAPE, a1, a2, n, 0, &sig, NULL, NULL);
+  double e1 = hoc_distortion_point(HOC_MEASURE_SHAPE, a1, a2, n, 1e-9, &sig, NULL, NULL);
+  CHECK_NEAR(e0, e1, 1e-12);
+  CHECK_NEAR(sig, 0.8, 1e-15);
+  double b2[3] = {0.5, -0.8, 0};
+  CHECK(isinf(hoc_distortion_point(HOC_MEASURE_SHAPE, a1, b2, n, 0, &sig, NULL, NULL)));
+  CHECK_NEAR(sig, -0.8, 1e-15);
+  double er = hoc_distortion_point(HOC_MEASURE_ODDY, a1, b2, n, 1e-3, &sig, NULL, NULL);
+  CHECK(isfinite(er) && er > 1);
+  /* an element standing on its edge, perpendicular to the surface: sigma =
+   * gamma |a1 x a2| with gamma = -1 (tangled) */
+  double c2[3] = {0, 0, 1};
+  double n2[3] = {0, 1e-3, 1};
+  hoc_distortion_point(HOC_MEASURE_SHAPE, a1, c2, n2, 0, &sig, NULL, NULL);
+  CHECK_NEAR(sig, -1.0, 1e-15);
+}
+
+int main(void) {
+  test_ideal();
+  test_linear_closed_forms();
+  test_invariance();
+  test_planar_definition1();
+  test_gradients();
+  test_regularisation();
+  return test_report();
+}

@@ -1,0 +1,768 @@
+/* hocad: the command-line tool. Options, progress, printing and exit codes
+ * live here; the work is done by libhocad.
+ * SPDX-License-Identifier: GPL-2.0-or-later */
+#include "hocad.h"
+
+#include <errno.h>
+#include <math.h>
+#include <omp.h>
+#include <signal.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+#include <time.h>
+#include <unistd.h>
+
+/* Exit codes (documented in README.md and --help). */
+enum {
+  EXIT_OK = 0,
+  EXIT_USAGE = 1,       /* bad command line */
+  EXIT_INPUT = 2,       /* model or mesh file missing, unreadable, corrupt or mismatched */
+  EXIT_OUTPUT = 3,      /* an output file cannot be written */
+  EXIT_PARTIAL = 4,     /* some faces could not be meshed; the rest was written */
+  EXIT_TANGLED = 5,     /* tangled elements remain in the written mesh */
+  EXIT_FAILURE_ = 6,    /* meshing failed, out of memory, or an internal error */
+  EXIT_INTERRUPTED = 130
+};
+
+static const char *program = "hocad";
+
+static void error_line(const char *fmt, ...) {
+  va_list ap;
+  va_start(ap, fmt);
+  fprintf(stderr, "%s: error: ", program);
+  vfprintf(stderr, fmt, ap);
+  fputc('\n', stderr);
+  va_end(ap);
+}
+
+/* Exit code of a failed library call, by what it was doing. */
+static int fail(hoc_status st, int input_stage) {
+  error_line("%s", hoc_last_error()[0] ? hoc_last_error() : hoc_status_string(st));
+  switch (st) {
+  case HOC_ERR_ARGUMENT: return EXIT_USAGE;
+  case HOC_ERR_IO: return input_stage ? EXIT_INPUT : EXIT_OUTPUT;
+  case HOC_ERR_FORMAT:
+  case HOC_ERR_CAD:
+  case HOC_ERR_MISMATCH: return EXIT_INPUT;
+  case HOC_ERR_UNSUPPORTED: return input_stage ? EXIT_INPUT : EXIT_OUTPUT;
+  case HOC_ERR_INTERRUPTED: return EXIT_INTERRUPTED;
+  default: return EXIT_FAILURE_;
+  }
+}
+
+static void on_signal(int sig) {
+  hoc_abort_outputs_from_signal();
+  static const char msg[] = "\nhocad: interrupted; no output was written\n";
+  ssize_t w = write(STDERR_FILENO, msg, sizeof msg - 1);
+  (void)w;
+  _exit(sig == SIGINT ? EXIT_INTERRUPTED : 128 + sig);
+}
+
+static double now(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* Options ----------------------------------------------------------------- */
+
+typedef struct options {
+  const char *model, *mesh_in, *out, *vtu, *json;
+  int order, threads, quiet, no_output, optimize, have_order, fix_curves, max_iterations,
+      check_gradient;
+  double size, size_min, curvature;
+  hoc_nodeset nodes;
+  hoc_measure measure;
+} options;
+
+static int parse_int(const char *opt, const char *s, int lo, int hi, int *out) {
+  char *end;
+  errno = 0;
+  long v = s ? strtol(s, &end, 10) : 0;
+  if (!s || !*s || *end || errno || v < lo || v > hi) {
+    error_line("%s expects an integer in %d..%d, got '%s'", opt, lo, hi, s ? s : "");
+    return 0;
+  }
+  *out = (int)v;
+  return 1;
+}
+
+static int parse_positive(const char *opt, const char *s, double *out) {
+  char *end;
+  errno = 0;
+  double v = s ? strtod(s, &end) : 0;
+  if (!s || !*s || *end || errno || !isfinite(v) || !(v > 0)) {
+    error_line("%s expects a positive number, got '%s'", opt, s ? s : "");
+    return 0;
+  }
+  *out = v;
+  return 1;
+}
+
+/* --name value or --name=value: returns the value or NULL if this argument
+ * is not `name`. *i advances past a separate value. */
+static const char *opt_value(int argc, char **argv, int *i, const char *name, int *missing) {
+  const char *a = argv[*i];
+  size_t n = strlen(name);
+  if (strncmp(a, name, n)) return NULL;
+  if (a[n] == '=') return a + n + 1;
+  if (a[n]) return NULL;
+  if (*i + 1 >= argc) {
+    *missing = 1;
+    return NULL;
+  }
+  return argv[++*i];
+}
+
+#define OPTIMIZE_OPTIONS                                                                   \
+  "  --fix-curves         keep nodes on CAD curves fixed (the seed's choice);\n"             \
+  "                       by default they slide along their curve\n"                          \
+  "  --max-iterations N   optimizer sweeps (default 100)\n"                                   \
+  "  --check-gradient     compare the analytic gradient with finite differences\n"
+
+static const char *usage_main =
+    "usage: hocad <command> [options]\n"
+    "\n"
+    "Valid high-order (curved) triangle surface meshes on CAD models (STEP, IGES,\n"
+    "BREP), every node on the CAD surface.\n"
+    "\n"
+    "commands:\n"
+    "  mesh MODEL      linear mesh, raise to order P, untangle and smooth, measure\n"
+    "  optimize MODEL IN.msh -o OUT.msh\n"
+    "                  untangle and smooth any high-order .msh surface mesh of MODEL\n"
+    "  quality MODEL MESH.msh\n"
+    "                  measure a gmsh .msh surface mesh of MODEL\n"
+    "\n"
+    "  hocad COMMAND --help   options of a command\n"
+    "  hocad --version        version\n"
+    "\n"
+    "exit codes: 0 ok, 1 bad command line, 2 bad input file (missing, unreadable,\n"
+    "corrupt, not CAD, mesh not on the model), 3 cannot write an output,\n"
+    "4 some faces could not be meshed (the rest was written), 5 tangled\n"
+    "elements remain, 6 meshing failed or internal error, 130 interrupted.\n";
+
+static const char *usage_mesh =
+    "usage: hocad mesh MODEL [options]\n"
+    "\n"
+    "Mesh every face of MODEL (.step .stp .iges .igs .brep) with linear triangles,\n"
+    "raise them to order P (new nodes placed in each face's parametric space and\n"
+    "mapped onto the surface; nodes on CAD curves placed on the curves), and\n"
+    "report the quality q = 1/eta of every stage (eta: the seed's Definition 2).\n"
+    "\n"
+    "options:\n"
+    "  -p, --order P        element order, 1..15 (default 3)\n"
+    "  --size H             maximum edge length of the linear mesh\n"
+    "                       (default: bounding-box diagonal / 20)\n"
+    "  --size-min H         minimum edge length (default: size / 50)\n"
+    "  --curvature N        elements per 2*pi of curvature radius (default 12)\n"
+    "  --nodes SET          equispaced | fekete | warp-blend (default equispaced);\n"
+    "                       files always hold equispaced nodes\n"
+    "  --measure M          shape | oddy (default shape)\n"
+    "  --no-optimize        stop after raising the order\n"
+    OPTIMIZE_OPTIONS
+    "  -o, --output F.msh   gmsh MSH 4.1 output (default: MODEL-NAME_pP.msh here;\n"
+    "                       orders above 10 have no MSH type: use --vtu)\n"
+    "  --vtu F.vtu          VTK Lagrange triangles with q per element\n"
+    "  --json F.json        the report as JSON\n"
+    "  --no-output          write no mesh file\n"
+    "  --threads N          threads for measuring (default: all cores)\n"
+    "  -q, --quiet          print only errors\n";
+
+static const char *usage_optimize =
+    "usage: hocad optimize MODEL IN.msh -o OUT.msh [options]\n"
+    "\n"
+    "Untangle and smooth a high-order surface mesh of MODEL (e.g. gmsh's own\n"
+    "'gmsh MODEL -2 -order 3'): minimise the sum over elements of the integral of\n"
+    "(eta - 1)^2 over the parametric coordinates of the nodes, so every node stays\n"
+    "on the CAD. Reports the input and optimized stages.\n"
+    "\n"
+    "options:\n"
+    "  -o, --output F.msh   optimized mesh (MSH 4.1), or F.vtu\n"
+    "  --vtu F.vtu          also a VTU with q per element\n"
+    "  --json F.json        the report as JSON\n"
+    "  --measure M          shape | oddy (default shape)\n"
+    OPTIMIZE_OPTIONS
+    "  --threads N          threads (default: all cores)\n"
+    "  -q, --quiet          print only errors\n";
+
+static const char *usage_quality =
+    "usage: hocad quality MODEL MESH.msh [options]\n"
+    "\n"
+    "Read a gmsh MSH 4.1 or 2.2 surface mesh of MODEL (any triangle order up to 10,\n"
+    "e.g. written by hocad or by gmsh) and report q = 1/eta (the seed's\n"
+    "Definition 2). Nodes without parametric coordinates are located on their\n"
+    "CAD entities.\n"
+    "\n"
+    "options:\n"
+    "  --measure M          shape | oddy (default shape)\n"
+    "  --vtu F.vtu          write the mesh with q per element\n"
+    "  --json F.json        the report as JSON\n"
+    "  --threads N          threads (default: all cores)\n"
+    "  -q, --quiet          print only errors\n";
+
+enum { CMD_MESH = 1, CMD_OPTIMIZE = 2, CMD_QUALITY = 4 };
+
+static const char *command_name(int cmd) {
+  return cmd == CMD_MESH ? "mesh" : cmd == CMD_OPTIMIZE ? "optimize" : "quality";
+}
+
+/* Parse the options of a command; positional arguments go to pos[].
+ * Returns 1 on success, 0 after printing an error, -1 for --help. */
+static int parse(int argc, char **argv, options *o, const char **pos, int max_pos, int *n_pos,
+                 int cmd) {
+  const int mesh = cmd == CMD_MESH, opt = cmd & (CMD_MESH | CMD_OPTIMIZE);
+  *n_pos = 0;
+  for (int i = 0; i < argc; ++i) {
+    const char *a = argv[i], *v;
+    int missing = 0;
+#define VALUE(name) (!missing && (v = opt_value(argc, argv, &i, name, &missing)))
+    if (!strcmp(a, "-h") || !strcmp(a, "--help")) return -1;
+    if (!strcmp(a, "-q") || !strcmp(a, "--quiet")) {
+      o->quiet = 1;
+    } else if (VALUE("--measure")) {
+      if (!strcmp(v, "shape")) o->measure = HOC_MEASURE_SHAPE;
+      else if (!strcmp(v, "oddy")) o->measure = HOC_MEASURE_ODDY;
+      else {
+        error_line("--measure expects shape or oddy, got '%s'", v);
+        return 0;
+      }
+    } else if (VALUE("--threads")) {
+      if (!parse_int("--threads", v, 1, 1024, &o->threads)) return 0;
+    } else if (VALUE("--json")) {
+      o->json = v;
+    } else if (VALUE("--vtu")) {
+      o->vtu = v;
+    } else if (opt && !strcmp(a, "--fix-curves")) {
+      o->fix_curves = 1;
+    } else if (opt && !strcmp(a, "--check-gradient")) {
+      o->check_gradient = 1;
+    } else if (opt && VALUE("--max-iterations")) {
+      if (!parse_int("--max-iterations", v, 1, 100000, &o->max_iterations)) return 0;
+    } else if (opt && (VALUE("--output") || VALUE("-o"))) {
+      o->out = v;
+    } else if (mesh && (VALUE("--order") || VALUE("-p"))) {
+      if (!parse_int("--order", v, 1, HOC_MAX_ORDER, &o->order)) return 0;
+      o->have_order = 1;
+    } else if (mesh && VALUE("--size-min")) {
+      if (!parse_positive("--size-min", v, &o->size_min)) return 0;
+    } else if (mesh && VALUE("--size")) {
+      if (!parse_positive("--size", v, &o->size)) return 0;
+    } else if (mesh && VALUE("--curvature")) {
+      if (!parse_positive("--curvature", v, &o->curvature)) return 0;
+      if (o->curvature > 1000) {
+        error_line("--curvature expects at most 1000 elements per 2*pi, got '%s'", v);
+        return 0;
+      }
+    } else if (mesh && VALUE("--nodes")) {
+      if (!strcmp(v, "equispaced")) o->nodes = HOC_NODES_EQUISPACED;
+      else if (!strcmp(v, "fekete")) o->nodes = HOC_NODES_FEKETE;
+      else if (!strcmp(v, "warp-blend")) o->nodes = HOC_NODES_WARP_BLEND;
+      else {
+        error_line("--nodes expects equispaced, fekete or warp-blend, got '%s'", v);
+        return 0;
+      }
+    } else if (mesh && !strcmp(a, "--no-optimize")) {
+      o->optimize = 0;
+    } else if (mesh && !strcmp(a, "--no-output")) {
+      o->no_output = 1;
+    } else if (missing) {
+      error_line("option %s needs a value", a);
+      return 0;
+    } else if (a[0] == '-' && a[1]) {
+      error_line("unknown option '%s' (see hocad %s --help)", a, command_name(cmd));
+      return 0;
+    } else {
+      if (*n_pos >= max_pos) {
+        error_line("unexpected argument '%s' (see hocad %s --help)", a, command_name(cmd));
+        return 0;
+      }
+      pos[(*n_pos)++] = a;
+    }
+#undef VALUE
+    if (missing) {
+      error_line("option %s needs a value", a);
+      return 0;
+    }
+  }
+  return 1;
+}
+
+/* Report ------------------------------------------------------------------ */
+
+typedef struct stage {
+  const char *name;
+  hoc_quality_stats stats;
+  double seconds; /* to produce the stage */
+  int optimized;  /* the fields below are set */
+  int iterations, converged;
+  double objective_initial, objective;
+} stage;
+
+typedef struct report {
+  stage stages[4];
+  int n;
+} report;
+
+static void print_table(const report *r) {
+  printf("%-11s %5s %9s %7s %7s %7s %7s %8s %8s\n", "stage", "order", "elements", "min q",
+         "max q", "mean q", "std q", "tangled", "seconds");
+  for (int i = 0; i < r->n; ++i) {
+    const stage *s = &r->stages[i];
+    printf("%-11s %5d %9zu %7.4f %7.4f %7.4f %7.4f %8zu %8.3f\n", s->name, s->stats.order,
+           s->stats.elements, s->stats.min, s->stats.max, s->stats.mean, s->stats.std,
+           s->stats.tangled, s->seconds);
+  }
+  for (int i = 0; i < r->n; ++i) {
+    const stage *s = &r->stages[i];
+    if (s->optimized)
+      printf("%s: %d iterations, objective %.6g -> %.6g%s\n", s->name, s->iterations,
+             s->objective_initial, s->objective, s->converged ? ", converged" : ", not converged");
+  }
+}
+
+/* A growing text buffer for the JSON report. */
+typedef struct text {
+  char *s;
+  size_t n, cap;
+  int failed;
+} text;
+
+static void text_add(text *t, const char *fmt, ...) {
+  if (t->failed) return;
+  for (;;) {
+    va_list ap;
+    va_start(ap, fmt);
+    int k = vsnprintf(t->s ? t->s + t->n : NULL, t->s ? t->cap - t->n : 0, fmt, ap);
+    va_end(ap);
+    if (k < 0) {
+      t->failed = 1;
+      return;
+    }
+    if (t->s && t->n + (size_t)k < t->cap) {
+      t->n += (size_t)k;
+      return;
+    }
+    size_t cap = t->cap ? 2 * t->cap : 1024;
+    while (cap < t->n + (size_t)k + 1) cap *= 2;
+    char *s = realloc(t->s, cap);
+    if (!s) {
+      t->failed = 1;
+      return;
+    }
+    t->s = s;
+    t->cap = cap;
+  }
+}
+
+static void json_string(text *t, const char *s) {
+  text_add(t, "\"");
+  for (; s && *s; ++s) {
+    unsigned char c = (unsigned char)*s;
+    if (c == '"' || c == '\\') text_add(t, "\\%c", c);
+    else if (c < 0x20) text_add(t, "\\u%04x", c);
+    else text_add(t, "%c", c);
+  }
+  text_add(t, "\"");
+}
+
+static int write_json(const char *path, const options *o, const report *r, const char *command) {
+  text t = {0};
+  text_add(&t, "{\n  \"command\": ");
+  json_string(&t, command);
+  text_add(&t, ",\n  \"model\": ");
+  json_string(&t, o->model);
+  if (o->mesh_in) {
+    text_add(&t, ",\n  \"mesh\": ");
+    json_string(&t, o->mesh_in);
+  }
+  text_add(&t, ",\n  \"measure\": \"%s\",\n  \"version\": \"%s\",\n  \"stages\": [",
+           o->measure == HOC_MEASURE_ODDY ? "oddy" : "shape", hoc_version());
+  for (int i = 0; i < r->n; ++i) {
+    const stage *s = &r->stages[i];
+    text_add(&t,
+             "%s\n    {\"name\": \"%s\", \"order\": %d, \"elements\": %zu, \"min\": %.17g, "
+             "\"max\": %.17g, \"mean\": %.17g, \"std\": %.17g, \"tangled\": %zu, "
+             "\"seconds\": %.6f, \"measure_seconds\": %.6f",
+             i ? "," : "", s->name, s->stats.order, s->stats.elements, s->stats.min, s->stats.max,
+             s->stats.mean, s->stats.std, s->stats.tangled, s->seconds, s->stats.seconds);
+    if (s->optimized)
+      text_add(&t, ", \"iterations\": %d, \"converged\": %s, \"objective_initial\": %.17g, "
+                   "\"objective\": %.17g",
+               s->iterations, s->converged ? "true" : "false", s->objective_initial, s->objective);
+    text_add(&t, "}");
+  }
+  text_add(&t, "\n  ]\n}\n");
+  if (t.failed) {
+    free(t.s);
+    error_line("out of memory writing the report");
+    return EXIT_FAILURE_;
+  }
+  hoc_status st = hoc_write_file_atomic(path, t.s, t.n);
+  free(t.s);
+  return st == HOC_OK ? EXIT_OK : fail(st, 0);
+}
+
+static void progress(const options *o, const char *fmt, ...) {
+  if (o->quiet || !isatty(STDERR_FILENO)) return;
+  va_list ap;
+  va_start(ap, fmt);
+  fprintf(stderr, "[hocad] ");
+  vfprintf(stderr, fmt, ap);
+  fputc('\n', stderr);
+  va_end(ap);
+}
+
+static int measure_stage(const options *o, report *r, const char *name, const hoc_mesh *mesh,
+                         double seconds, double *q) {
+  stage *s = &r->stages[r->n];
+  s->name = name;
+  s->seconds = seconds;
+  hoc_status st = hoc_mesh_measure(mesh, o->measure, q, NULL, &s->stats);
+  if (st != HOC_OK) return fail(st, 0);
+  r->n++;
+  return EXIT_OK;
+}
+
+/* Default output name: the model's base name without extension, _pP.msh, in
+ * the current directory. */
+static void default_output(const char *model, int order, char *buf, size_t size) {
+  const char *base = strrchr(model, '/');
+  base = base ? base + 1 : model;
+  const char *dot = strrchr(base, '.');
+  int len = dot ? (int)(dot - base) : (int)strlen(base);
+  snprintf(buf, size, "%.*s_p%d.%s", len, base, order, order <= 10 ? "msh" : "vtu");
+}
+
+/* Optimisation stage, shared by mesh and optimize. */
+static int iteration_line(void *user, const hoc_optimize_iteration *it) {
+  const options *o = user;
+  if (!o->quiet && isatty(STDERR_FILENO))
+    fprintf(stderr, "[hocad] iteration %3d: objective %.6g, min q %.4f, %zu tangled, %zu nodes moved (%.1f s)\n",
+            it->iteration, it->objective, it->min_q, it->tangled, it->moved, it->seconds);
+  return 0;
+}
+
+static int optimize_stage(const options *o, report *r, hoc_mesh *mesh) {
+  if (o->check_gradient) {
+    double err;
+    hoc_status st = hoc_mesh_check_gradient(mesh, o->measure, o->fix_curves, 200, &err);
+    if (st != HOC_OK) return fail(st, 0);
+    if (!o->quiet)
+      printf("gradient check: largest relative difference to central differences %.2e (%s)\n", err,
+             err < 1e-4 ? "ok" : "MISMATCH");
+  }
+  hoc_optimize_options oo;
+  hoc_optimize_options_default(&oo);
+  oo.measure = o->measure;
+  oo.fix_curves = o->fix_curves;
+  if (o->max_iterations) oo.max_iterations = o->max_iterations;
+  oo.progress = iteration_line;
+  oo.progress_user = (void *)o;
+  progress(o, "optimizing %zu elements", hoc_mesh_num_elements(mesh));
+  hoc_optimize_result res;
+  double t0 = now();
+  hoc_status st = hoc_mesh_optimize(mesh, &oo, &res);
+  if (st != HOC_OK) return fail(st, 0);
+  int code = measure_stage(o, r, "optimized", mesh, now() - t0, NULL);
+  if (code) return code;
+  stage *s = &r->stages[r->n - 1];
+  s->optimized = 1;
+  s->iterations = res.iterations;
+  s->converged = res.converged;
+  s->objective_initial = res.objective_initial;
+  s->objective = res.objective_final;
+  return EXIT_OK;
+}
+
+/* Where tangled elements remain: say which (on stderr). */
+static void report_tangled(const hoc_mesh *mesh, const double *q) {
+  size_t ne = hoc_mesh_num_elements(mesh), shown = 0, total = 0;
+  for (size_t e = 0; e < ne; ++e) total += q[e] == 0.0;
+  if (!total) return;
+  fprintf(stderr, "%s: warning: %zu element(s) could not be untangled with this linear mesh "
+                  "(try a smaller --size or a larger --curvature):", program, total);
+  for (size_t e = 0; e < ne && shown < 20; ++e)
+    if (q[e] == 0.0) {
+      fprintf(stderr, " %zu (face %d)", e + 1, hoc_mesh_element_face_tag(mesh, e));
+      ++shown;
+    }
+  fprintf(stderr, "%s\n", total > shown ? " ..." : "");
+}
+
+/* Write the requested files for `mesh` with per-element q. */
+static int write_outputs(const options *o, const hoc_mesh *mesh, const double *q, const char *out) {
+  hoc_status st;
+  if (out) {
+    progress(o, "writing %s", out);
+    size_t len = strlen(out);
+    int is_vtu = len >= 4 && !strcasecmp(out + len - 4, ".vtu");
+    st = is_vtu ? hoc_mesh_write_vtu(mesh, q, out) : hoc_mesh_write_msh(mesh, out);
+    if (st != HOC_OK) return fail(st, 0);
+    if (!o->quiet) printf("wrote %s\n", out);
+  }
+  if (o->vtu) {
+    st = hoc_mesh_write_vtu(mesh, q, o->vtu);
+    if (st != HOC_OK) return fail(st, 0);
+    if (!o->quiet) printf("wrote %s\n", o->vtu);
+  }
+  return EXIT_OK;
+}
+
+/* Commands ---------------------------------------------------------------- */
+
+static int cmd_mesh(int argc, char **argv) {
+  options o = {0};
+  o.order = 3;
+  o.optimize = 1;
+  const char *pos[1];
+  int n_pos, pr = parse(argc, argv, &o, pos, 1, &n_pos, CMD_MESH);
+  if (pr < 0) {
+    fputs(usage_mesh, stdout);
+    return EXIT_OK;
+  }
+  if (!pr) return EXIT_USAGE;
+  if (n_pos != 1) {
+    error_line("mesh needs one CAD model (see hocad mesh --help)");
+    return EXIT_USAGE;
+  }
+  o.model = pos[0];
+  if (o.size_min > 0 && o.size > 0 && o.size_min > o.size) {
+    error_line("--size-min %g exceeds --size %g", o.size_min, o.size);
+    return EXIT_USAGE;
+  }
+  char out_buf[1024];
+  const char *out = o.out;
+  if (!out && !o.no_output && !o.vtu) {
+    default_output(o.model, o.order, out_buf, sizeof out_buf);
+    out = out_buf;
+  }
+  if (o.no_output) out = NULL;
+  if (out && o.order > 10 && strlen(out) >= 4 && !strcasecmp(out + strlen(out) - 4, ".msh")) {
+    error_line("gmsh's MSH format has no triangle of order %d (at most 10): use --vtu", o.order);
+    return EXIT_USAGE;
+  }
+  if (o.threads) omp_set_num_threads(o.threads);
+
+  int code = EXIT_OK;
+  hoc_model *model = NULL;
+  hoc_mesh *lin = NULL, *ho = NULL;
+  double *q = NULL;
+  report r = {0};
+  progress(&o, "reading %s", o.model);
+  double t0 = now();
+  hoc_status st = hoc_model_open(o.model, &model);
+  if (st != HOC_OK) return fail(st, 1);
+  double bb[6];
+  hoc_model_bbox(model, bb);
+  if (!o.quiet)
+    printf("model %s: %d faces, %d curves, %d vertices, size %.4g x %.4g x %.4g (%.2f s)\n",
+           o.model, hoc_model_num_faces(model), hoc_model_num_curves(model),
+           hoc_model_num_vertices(model), bb[3] - bb[0], bb[4] - bb[1], bb[5] - bb[2],
+           now() - t0);
+
+  hoc_linear_options lo;
+  hoc_linear_options_default(&lo);
+  lo.size_max = o.size;
+  lo.size_min = o.size_min;
+  lo.curvature = o.curvature;
+  lo.order = o.order;
+  progress(&o, "meshing %d faces", hoc_model_num_faces(model));
+  t0 = now();
+  st = hoc_mesh_generate_linear(model, &lo, &lin);
+  if (st != HOC_OK) {
+    code = fail(st, 1);
+    goto done;
+  }
+  double t_lin = now() - t0;
+  if (hoc_mesh_num_failed_faces(lin))
+    fprintf(stderr, "%s: warning: %d face(s) could not be meshed; the rest is processed\n",
+            program, hoc_mesh_num_failed_faces(lin));
+  if ((code = measure_stage(&o, &r, "linear", lin, t_lin, NULL))) goto done;
+  const hoc_mesh *final = lin;
+  if (o.order > 1) {
+    progress(&o, "raising %zu elements to order %d", hoc_mesh_num_elements(lin), o.order);
+    t0 = now();
+    st = hoc_mesh_elevate(lin, o.order, o.nodes, &ho);
+    if (st != HOC_OK) {
+      code = fail(st, 0);
+      goto done;
+    }
+    if ((code = measure_stage(&o, &r, "high-order", ho, now() - t0, NULL))) goto done;
+    final = ho;
+  }
+  if (o.optimize && o.order > 1) {
+    if ((code = optimize_stage(&o, &r, ho))) goto done;
+  }
+  if (!o.quiet) print_table(&r);
+
+  size_t ne = hoc_mesh_num_elements(final);
+  q = calloc(ne ? ne : 1, sizeof *q);
+  if (!q) {
+    error_line("out of memory");
+    code = EXIT_FAILURE_;
+    goto done;
+  }
+  st = hoc_mesh_measure(final, o.measure, q, NULL, NULL);
+  if (st != HOC_OK) {
+    code = fail(st, 0);
+    goto done;
+  }
+  if ((code = write_outputs(&o, final, q, out))) goto done;
+  if (o.json) {
+    if ((code = write_json(o.json, &o, &r, "mesh"))) goto done;
+    if (!o.quiet) printf("wrote %s\n", o.json);
+  }
+  report_tangled(final, q);
+  if (r.stages[r.n - 1].stats.tangled) code = EXIT_TANGLED;
+  if (!code && hoc_mesh_num_failed_faces(lin)) code = EXIT_PARTIAL;
+done:
+  free(q);
+  hoc_mesh_destroy(&ho);
+  hoc_mesh_destroy(&lin);
+  hoc_model_destroy(&model);
+  return code;
+}
+
+static int cmd_quality(int argc, char **argv) {
+  options o = {0};
+  const char *pos[2];
+  int n_pos, pr = parse(argc, argv, &o, pos, 2, &n_pos, CMD_QUALITY);
+  if (pr < 0) {
+    fputs(usage_quality, stdout);
+    return EXIT_OK;
+  }
+  if (!pr) return EXIT_USAGE;
+  if (n_pos != 2) {
+    error_line("quality needs a CAD model and a .msh mesh (see hocad quality --help)");
+    return EXIT_USAGE;
+  }
+  o.model = pos[0];
+  o.mesh_in = pos[1];
+  if (o.threads) omp_set_num_threads(o.threads);
+  int code = EXIT_OK;
+  hoc_model *model = NULL;
+  hoc_mesh *mesh = NULL;
+  double *q = NULL;
+  report r = {0};
+  hoc_status st = hoc_model_open(o.model, &model);
+  if (st != HOC_OK) return fail(st, 1);
+  double t0 = now();
+  st = hoc_mesh_read_msh(model, o.mesh_in, &mesh);
+  if (st != HOC_OK) {
+    code = fail(st, 1);
+    goto done;
+  }
+  size_t ne = hoc_mesh_num_elements(mesh);
+  q = calloc(ne ? ne : 1, sizeof *q);
+  if (!q) {
+    error_line("out of memory");
+    code = EXIT_FAILURE_;
+    goto done;
+  }
+  if ((code = measure_stage(&o, &r, "input", mesh, now() - t0, q))) goto done;
+  if (!o.quiet) {
+    printf("mesh %s on %s: %zu nodes\n", o.mesh_in, o.model, hoc_mesh_num_nodes(mesh));
+    print_table(&r);
+  }
+  if (o.vtu) {
+    st = hoc_mesh_write_vtu(mesh, q, o.vtu);
+    if (st != HOC_OK) {
+      code = fail(st, 0);
+      goto done;
+    }
+  }
+  if (o.json) code = write_json(o.json, &o, &r, "quality");
+done:
+  free(q);
+  hoc_mesh_destroy(&mesh);
+  hoc_model_destroy(&model);
+  return code;
+}
+
+static int cmd_optimize(int argc, char **argv) {
+  options o = {0};
+  const char *pos[2];
+  int n_pos, pr = parse(argc, argv, &o, pos, 2, &n_pos, CMD_OPTIMIZE);
+  if (pr < 0) {
+    fputs(usage_optimize, stdout);
+    return EXIT_OK;
+  }
+  if (!pr) return EXIT_USAGE;
+  if (n_pos != 2) {
+    error_line("optimize needs a CAD model and a .msh mesh (see hocad optimize --help)");
+    return EXIT_USAGE;
+  }
+  if (!o.out && !o.vtu) {
+    error_line("optimize needs an output: -o OUT.msh (the input is never overwritten in place)");
+    return EXIT_USAGE;
+  }
+  o.model = pos[0];
+  o.mesh_in = pos[1];
+  if (o.threads) omp_set_num_threads(o.threads);
+  int code = EXIT_OK;
+  hoc_model *model = NULL;
+  hoc_mesh *mesh = NULL;
+  double *q = NULL;
+  report r = {0};
+  hoc_status st = hoc_model_open(o.model, &model);
+  if (st != HOC_OK) return fail(st, 1);
+  double t0 = now();
+  st = hoc_mesh_read_msh(model, o.mesh_in, &mesh);
+  if (st != HOC_OK) {
+    code = fail(st, 1);
+    goto done;
+  }
+  if ((code = measure_stage(&o, &r, "input", mesh, now() - t0, NULL))) goto done;
+  if ((code = optimize_stage(&o, &r, mesh))) goto done;
+  if (!o.quiet) {
+    printf("mesh %s on %s: %zu nodes\n", o.mesh_in, o.model, hoc_mesh_num_nodes(mesh));
+    print_table(&r);
+  }
+  size_t ne = hoc_mesh_num_elements(mesh);
+  q = calloc(ne ? ne : 1, sizeof *q);
+  if (!q) {
+    error_line("out of memory");
+    code = EXIT_FAILURE_;
+    goto done;
+  }
+  st = hoc_mesh_measure(mesh, o.measure, q, NULL, NULL);
+  if (st != HOC_OK) {
+    code = fail(st, 0);
+    goto done;
+  }
+  if ((code = write_outputs(&o, mesh, q, o.out))) goto done;
+  if (o.json && (code = write_json(o.json, &o, &r, "optimize"))) goto done;
+  report_tangled(mesh, q);
+  if (r.stages[r.n - 1].stats.tangled) code = EXIT_TANGLED;
+done:
+  free(q);
+  hoc_mesh_destroy(&mesh);
+  hoc_model_destroy(&model);
+  return code;
+}
+
+int main(int argc, char **argv) {
+  signal(SIGINT, on_signal);
+  signal(SIGTERM, on_signal);
+  if (argc < 2) {
+    fputs(usage_main, stderr);
+    return EXIT_USAGE;
+  }
+  const char *cmd = argv[1];
+  if (!strcmp(cmd, "-h") || !strcmp(cmd, "--help") || !strcmp(cmd, "help")) {
+    fputs(usage_main, stdout);
+    return EXIT_OK;
+  }
+  if (!strcmp(cmd, "--version") || !strcmp(cmd, "-V")) {
+    printf("hocad %s\n", hoc_version());
+    return EXIT_OK;
+  }
+  if (!strcmp(cmd, "mesh")) return cmd_mesh(argc - 2, argv + 2);
+  if (!strcmp(cmd, "quality")) return cmd_quality(argc - 2, argv + 2);
+  if (!strcmp(cmd, "optimize")) return cmd_optimize(argc - 2, argv + 2);
+  error_line("unknown command '%s' (commands: mesh, optimize, quality; see hocad --help)", cmd);
+  return EXIT_USAGE;
+}
