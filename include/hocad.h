@@ -214,7 +214,9 @@ typedef struct hoc_optimize_options {
   hoc_measure measure;  /**< distortion measure (default shape) */
   int fix_curves;       /**< 1: nodes on CAD curves stay where they are (the seed's choice) */
   int max_iterations;   /**< sweeps (0: 100) */
-  double tolerance;     /**< stop when a sweep lowers f by less than this fraction (0: 1e-4) */
+  double tolerance;     /**< a node whose move lowers f by less than tolerance * f / (free
+                             nodes) goes to sleep (and wakes no neighbour); the optimisation
+                             ends when every node sleeps (0: 0.1) */
   hoc_optimize_progress_fn progress;
   void *progress_user;
 } hoc_optimize_options;
@@ -223,7 +225,7 @@ void hoc_optimize_options_default(hoc_optimize_options *options);
 
 typedef struct hoc_optimize_result {
   int iterations;
-  int converged;        /**< the tolerance was met with no tangled element */
+  int converged;        /**< every node asleep (tolerance met) and no tangled element */
   double objective_initial, objective_final;
   size_t tangled_initial, tangled_final;
   size_t free_nodes;    /**< nodes the optimiser could move */

@@ -185,8 +185,16 @@ static void test_planar_definition1(void) {
           if (sig <= 0) tangled = 1;
           sum += t->w[q] * eta * eta;
         }
+        for (size_t j = 0; j < np; ++j) { /* Definition 2 also asks det > 0 at the nodes */
+          double S[4] = {0, 0, 0, 0};
+          for (size_t i = 0; i < np; ++i)
+            for (int r = 0; r < 2; ++r)
+              for (int c = 0; c < 2; ++c) S[2 * r + c] += x[3 * i + r] * t->Gn[2 * (j * np + i) + c];
+          if (S[0] * S[3] - S[1] * S[2] <= 0) tangled = 1;
+        }
         double eta2, q2 = hoc_element_quality(t, (hoc_measure)meas, x, n, &eta2, NULL);
         if (!tangled) CHECK_NEAR(q2, 1 / sqrt(sum), 1e-12);
+        else CHECK(q2 == 0.0);
       }
     }
     free(x);

@@ -49,6 +49,15 @@ hoc_status hoc_gmsh_start(void) {
   return HOC_OK;
 }
 
+/* A failed import leaves gmsh unable to read the next file (seen with 4.8:
+ * every later gmshOpen yields an empty model); only a restart recovers. */
+static void gmsh_restart_after_failure(void) {
+  int ierr = 0;
+  if (!gmsh_initialized) return;
+  gmshFinalize(&ierr);
+  gmsh_initialized = 0;
+}
+
 /* Redirection of stdout/stderr around chatty kernel calls. */
 hoc_status hoc_quiet_begin(hoc_quiet *q) {
   q->sink = tmpfile();
@@ -403,7 +412,7 @@ hoc_status hoc_cad_open_gmsh(const char *path, hoc_model **model) {
   char kernel_msg[256];
   hoc_quiet_end(&q, kernel_msg, sizeof kernel_msg);
   if (ierr) {
-    gmshClear(&ierr);
+    gmsh_restart_after_failure();
     if (kernel_msg[0])
       return HOC_ERROR(HOC_ERR_FORMAT, "cannot read CAD file '%s': %s", path, kernel_msg);
     return HOC_ERROR(HOC_ERR_FORMAT, "cannot read CAD file '%s' (corrupt or unsupported)", path);
@@ -437,11 +446,9 @@ fail:
   free(ftags);
   free(ctags);
   free(vtags);
-  if (m) {
-    hoc_model_destroy(&m); /* clears gmsh */
-  } else {
-    gmshClear(&ierr);
-  }
+  hoc_model_destroy(&m);
+  gmsh_model_in_use = 0;
+  gmsh_restart_after_failure();
   return status;
 }
 

@@ -385,7 +385,10 @@ static hoc_status slot_params(hoc_mesh *m, const hoc_mesh_source *src, double to
                      done);
       HOC_TRY_GOTO(hoc_cad_face_invert(model, f, m->xyz + 3 * i, p, &d), done);
     }
-    if (d > tol) {
+    /* a curve and the faces it bounds agree only to the model's tolerance
+     * (often 1e-4 of its size in STEP files): the node stays on its curve,
+     * the slot is the nearest point of the face */
+    if (d > 1e-2 * model->diagonal) {
       status = HOC_ERROR(HOC_ERR_MISMATCH,
                          "node %zu is %.3g away from face %d it bounds: the mesh does not match "
                          "this model",

@@ -172,13 +172,25 @@ static hoc_status reinterpolate(const hoc_mesh *in, int p, hoc_nodeset set, hoc_
         }
       }
     }
-    /* interior nodes: the source element's map in (u,v) */
+    /* interior nodes: the source element's map in (u,v); from a linear
+     * element with a pole vertex, the collapsed (Duffy) map instead, whose
+     * edges from the pole are the meridians the edge nodes follow */
     for (int k = 3 * p; k < np; ++k) {
       const double *Nk = Nsrc + (size_t)k * npi;
       double uv[2] = {0, 0};
       for (int i = 0; i < npi; ++i) {
         uv[0] += Nk[i] * euv[2 * i];
         uv[1] += Nk[i] * euv[2 * i + 1];
+      }
+      if (pin == 1) {
+        double lam[3] = {1 - rs[2 * k] - rs[2 * k + 1], rs[2 * k], rs[2 * k + 1]};
+        for (int j = 0; j < 3; ++j)
+          for (int d = 0; d < 2; ++d) {
+            if (!(in->slot_pole[sl[j]] & (1 << d))) continue;
+            int j1 = (j + 1) % 3, j2 = (j + 2) % 3;
+            double w = lam[j1] + lam[j2];
+            if (w > 0) uv[d] = (lam[j1] * euv[2 * j1 + d] + lam[j2] * euv[2 * j2 + d]) / w;
+          }
       }
       hoc_cad_face_wrap(face, uv);
       HOC_TRY_GOTO(builder_add(&b, HOC_ON_FACE, f, uv[0], uv[1], &out_cn[k]), done);

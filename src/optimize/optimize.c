@@ -21,6 +21,7 @@
 #include "mesh/mesh.h"
 #include "quality/quality.h"
 
+#include <float.h>
 #include <math.h>
 #include <omp.h>
 #include <stdlib.h>
@@ -38,7 +39,7 @@ void hoc_optimize_options_default(hoc_optimize_options *o) {
   memset(o, 0, sizeof *o);
   o->measure = HOC_MEASURE_SHAPE;
   o->max_iterations = 100;
-  o->tolerance = 1e-4;
+  o->tolerance = 0.1;
 }
 
 typedef struct opt {
@@ -63,8 +64,16 @@ typedef struct opt {
   double *delta;        /* [n_elems] regularisation of the sweep */
   unsigned char *valid; /* [n_elems] not tangled (Definition 2) */
   unsigned char *pvalid;/* [n_elems] not folded in the (u,v) plane */
+  unsigned char *region;/* [n_elems] tangled or next to a tangled element: regularised, and
+                           free to pass through sigma = 0 during the sweep */
   double *hsize;        /* [n_nodes] local length: bound on one step's displacement */
   unsigned char *active;/* [n_nodes] */
+  double min_gain;      /* a move that lowers f by less does not wake the neighbours */
+  unsigned char *moving;/* [n_nodes] use the trial state of this node */
+  size_t *carry_start;  /* [n_nodes+1] face-interior vertex -> the high-order nodes of its */
+  size_t *carry_node;   /*   star, moved with it in (u,v) ... */
+  double *carry_w;      /*   ... by their barycentric weight of the vertex */
+  double *fnew;         /* [n_nodes] local objective after an accepted move */
   /* per-node trial state of the colour being processed */
   double *step;         /* [n_nodes][2] Gauss-Newton direction */
   double *alpha;        /* [n_nodes] step length */
@@ -100,8 +109,14 @@ static void opt_free(opt *o) {
   free(o->delta);
   free(o->valid);
   free(o->pvalid);
+  free(o->region);
   free(o->hsize);
   free(o->active);
+  free(o->fnew);
+  free(o->moving);
+  free(o->carry_start);
+  free(o->carry_node);
+  free(o->carry_w);
   free(o->step);
   free(o->alpha);
   free(o->f0);
@@ -170,6 +185,8 @@ static hoc_status face_normal(const opt *o, int f, const double *uv, const doubl
 
 /* Setup ------------------------------------------------------------------- */
 
+static hoc_status build_carry(opt *o);
+
 static hoc_status setup(opt *o, hoc_mesh *m, hoc_measure measure, int fix_curves) {
   memset(o, 0, sizeof *o);
   o->m = m;
@@ -218,8 +235,11 @@ static hoc_status setup(opt *o, hoc_mesh *m, hoc_measure measure, int fix_curves
   HOC_ALLOC(o->delta, ne);
   HOC_ALLOC(o->valid, ne);
   HOC_ALLOC(o->pvalid, ne);
+  HOC_ALLOC(o->region, ne);
   HOC_ALLOC(o->hsize, nn);
   HOC_ALLOC(o->active, nn);
+  HOC_ALLOC(o->fnew, nn);
+  HOC_ALLOC(o->moving, nn);
   HOC_ALLOC(o->step, 2 * nn);
   HOC_ALLOC(o->alpha, nn);
   HOC_ALLOC(o->f0, nn);
@@ -231,14 +251,13 @@ static hoc_status setup(opt *o, hoc_mesh *m, hoc_measure measure, int fix_curves
   HOC_ALLOC(o->tnormal, 3 * m->n_slots + 3);
   HOC_ALLOC(o->state, nn);
   HOC_ALLOC(o->list, nn);
-  /* local length: the shortest edge of the linear sub-triangles around */
-  for (size_t i = 0; i < nn; ++i) o->hsize[i] = INFINITY;
+  /* local length: the longest edge of the linear sub-triangles around */
+  for (size_t i = 0; i < nn; ++i) o->hsize[i] = 0;
   for (size_t e = 0; e < ne; ++e) {
     const size_t *cn = m->conn + e * np;
-    double h = INFINITY;
-    for (int k = 0; k < 3; ++k) h = fmin(h, dist3(m->xyz + 3 * cn[k], m->xyz + 3 * cn[(k + 1) % 3]));
-    h /= m->order;
-    for (size_t k = 0; k < np; ++k) o->hsize[cn[k]] = fmin(o->hsize[cn[k]], h);
+    double h = 0;
+    for (int k = 0; k < 3; ++k) h = fmax(h, dist3(m->xyz + 3 * cn[k], m->xyz + 3 * cn[(k + 1) % 3]));
+    for (size_t k = 0; k < np; ++k) o->hsize[cn[k]] = fmax(o->hsize[cn[k]], h);
   }
   /* greedy colouring of the free nodes: neighbours share an element */
   int *color = hoc_calloc(nn, sizeof *color);
@@ -290,11 +309,63 @@ static hoc_status setup(opt *o, hoc_mesh *m, hoc_measure measure, int fix_curves
   for (size_t i = 0; i < nn; ++i)
     if (color[i] >= 0) o->color_node[o->color_start[color[i]]++] = i;
   csr_restore((size_t)max_colors, o->color_start);
+  HOC_TRY_GOTO(build_carry(o), done);
 done:
   free(color);
   free(stamp);
   free(count);
   return status;
+}
+
+/* Carried moves: a free face-interior vertex of the linear mesh (a node at
+ * a corner of every element around it) moves with the free high-order
+ * nodes of its star, each displaced in (u,v) by the vertex's barycentric
+ * weight at its reference position. Those nodes lie only in the star, so
+ * vertices of one colour carry disjoint sets. */
+static hoc_status build_carry(opt *o) {
+  hoc_mesh *m = o->m;
+  size_t nn = m->n_nodes, np = (size_t)o->np;
+  HOC_ALLOC(o->carry_start, nn + 1);
+  if (m->order < 2) return HOC_OK;
+  size_t total = 0;
+  for (size_t k = 0; k < nn; ++k) {
+    if (o->ndof[k] != 2) continue;
+    int corner = 1;
+    for (size_t a = o->ne_start[k]; a < o->ne_start[k + 1]; ++a) corner &= o->ne_local[a] < 3;
+    if (!corner) continue;
+    /* an upper bound: every high-order node of every element of the star */
+    total += (o->ne_start[k + 1] - o->ne_start[k]) * (np - 3);
+  }
+  HOC_ALLOC(o->carry_node, total + 1);
+  HOC_ALLOC(o->carry_w, total + 1);
+  size_t n = 0;
+  for (size_t k = 0; k < nn; ++k) {
+    o->carry_start[k] = n;
+    if (o->ndof[k] != 2) continue;
+    int corner = 1;
+    for (size_t a = o->ne_start[k]; a < o->ne_start[k + 1]; ++a) corner &= o->ne_local[a] < 3;
+    if (!corner) continue;
+    size_t first = n;
+    for (size_t a = o->ne_start[k]; a < o->ne_start[k + 1]; ++a) {
+      size_t e = o->ne_elem[a];
+      int kk = o->ne_local[a];
+      for (size_t i = 3; i < np; ++i) {
+        size_t node = m->conn[e * np + i];
+        if (o->ndof[node] != 2 || m->entity[node] != m->entity[k]) continue;
+        double r = o->t->rs[2 * i], t = o->t->rs[2 * i + 1];
+        double lam = kk == 0 ? 1 - r - t : kk == 1 ? r : t;
+        if (!(lam > 1e-12)) continue;
+        int seen = 0;
+        for (size_t j = first; j < n && !seen; ++j) seen = o->carry_node[j] == node;
+        if (seen) continue;
+        o->carry_node[n] = node;
+        o->carry_w[n] = lam;
+        ++n;
+      }
+    }
+  }
+  o->carry_start[nn] = n;
+  return HOC_OK;
 }
 
 /* Derivatives dx/dz of every free node and the normals of every slot. */
@@ -353,30 +424,30 @@ done:
 
 /* Element data ------------------------------------------------------------ */
 
-/* Positions and normals of element e's nodes; local node `kk` (or -1) takes
- * xk and nk instead. */
-static void gather(const opt *o, size_t e, int kk, const double *xk, const double *nk, double *x,
-                   double *n) {
+/* Positions and normals of element e's nodes: the trial state of nodes
+ * flagged `moving`, else the current one. */
+static void gather(const opt *o, size_t e, double *x, double *n) {
   const hoc_mesh *m = o->m;
   size_t np = (size_t)o->np;
   const size_t *cn = m->conn + e * np, *sl = m->elem_slot + e * np;
   for (size_t i = 0; i < np; ++i) {
-    memcpy(x + 3 * i, m->xyz + 3 * cn[i], 3 * sizeof *x);
-    memcpy(n + 3 * i, o->normal + 3 * sl[i], 3 * sizeof *n);
-  }
-  if (kk >= 0) {
-    memcpy(x + 3 * kk, xk, 3 * sizeof *x);
-    memcpy(n + 3 * kk, nk, 3 * sizeof *n);
+    int mv = o->moving[cn[i]];
+    memcpy(x + 3 * i, (mv ? o->txyz : m->xyz) + 3 * cn[i], 3 * sizeof *x);
+    memcpy(n + 3 * i, (mv ? o->tnormal : o->normal) + 3 * sl[i], 3 * sizeof *n);
   }
 }
 
+static void trial_elem_uv(const opt *o, size_t k, size_t e, int kk, double *uv);
+
 /* Element not folded in the (u,v) plane: orient * det(D u(xi)) > 0 at its
- * nodes; local node kk (or -1) at uvk instead. */
-static int param_valid(const opt *o, size_t e, int kk, const double *uvk, double *uv) {
+ * nodes (trial state of `moving` nodes). uv: [np][2] scratch. */
+static int param_valid(const opt *o, size_t e, double *uv) {
   const hoc_mesh *m = o->m;
   int np = o->np;
+  const size_t *cn = m->conn + e * (size_t)np;
   memcpy(uv, m->elem_uv + 2 * e * (size_t)np, 2 * (size_t)np * sizeof *uv);
-  if (kk >= 0) memcpy(uv + 2 * kk, uvk, 2 * sizeof *uv);
+  for (int i = 0; i < np; ++i)
+    if (o->moving[cn[i]]) trial_elem_uv(o, cn[i], e, i, uv + 2 * i);
   double sign = m->face_orient[m->elem_face[e]] < 0 ? -1.0 : 1.0;
   for (int j = 0; j < np; ++j) {
     const double *g = o->t->Gn + 2 * (size_t)j * np;
@@ -448,19 +519,53 @@ static hoc_status sweep_start(opt *o, double *objective, double *min_q, size_t *
 #pragma omp for schedule(static)
     for (size_t e = 0; e < ne; ++e) {
       if (!x) continue;
-      gather(o, e, -1, NULL, NULL, x, n);
+      gather(o, e, x, n);
       double eta;
       qe[e] = hoc_element_quality(o->t, o->measure, x, n, &eta, NULL);
       o->valid[e] = qe[e] > 0;
-      o->pvalid[e] = (unsigned char)param_valid(o, e, -1, NULL, uv);
+      o->pvalid[e] = (unsigned char)param_valid(o, e, uv);
       o->delta[e] = 0;
       if (!o->valid[e]) {
         double smin, scale;
         sigma_stats(o, x, n, &smin, &scale);
-        double eps = 1e-3 * scale;
+        double eps = (getenv("HOC_EPS") ? atof(getenv("HOC_EPS")) : 1e-3) * scale;
         o->delta[e] = smin < eps ? sqrt(eps * (eps - smin)) : 0;
         if (!(o->delta[e] > 0)) o->delta[e] = eps;
       }
+      hoc_element_residuals(o->t, o->measure, x, n, o->delta[e], r, NULL);
+      double f = 0;
+      for (int q = 0; q < nq; ++q) f += r[q] * r[q];
+      fe[e] = f;
+    }
+    free(x);
+  }
+  /* the tangled region: tangled elements and those sharing a node with one
+   * take the largest regularisation around them (Escobar et al. regularise
+   * the whole mesh with one delta; this keeps the rest of it exact) */
+  memset(o->region, 0, ne);
+  for (size_t e = 0; e < ne && !failed; ++e) {
+    if (o->valid[e]) continue;
+    for (int i = 0; i < np; ++i) {
+      size_t node = m->conn[e * (size_t)np + (size_t)i];
+      for (size_t a = o->ne_start[node]; a < o->ne_start[node + 1]; ++a) {
+        size_t e2 = o->ne_elem[a];
+        o->region[e2] = 1;
+        if (o->delta[e2] < o->delta[e]) o->delta[e2] = o->delta[e];
+      }
+    }
+  }
+#pragma omp parallel
+  {
+    double *x = malloc((6 * (size_t)np + (size_t)nq) * sizeof *x);
+    if (!x) {
+#pragma omp atomic write
+      failed = 1;
+    }
+    double *n = x ? x + 3 * np : NULL, *r = x ? x + 6 * np : NULL;
+#pragma omp for schedule(static)
+    for (size_t e = 0; e < ne; ++e) {
+      if (!x || !o->region[e] || !o->valid[e]) continue;
+      gather(o, e, x, n);
       hoc_element_residuals(o->t, o->measure, x, n, o->delta[e], r, NULL);
       double f = 0;
       for (int q = 0; q < nq; ++q) f += r[q] * r[q];
@@ -490,15 +595,56 @@ static hoc_status sweep_start(opt *o, double *objective, double *min_q, size_t *
 
 /* Local objective of node k at the current state: f, gradient g and
  * Gauss-Newton matrix H (packed h00 h01 h11) in its parameters. */
+static double carry_weight(const opt *o, size_t k, size_t node) {
+  for (size_t j = o->carry_start[k]; j < o->carry_start[k + 1]; ++j)
+    if (o->carry_node[j] == node) return o->carry_w[j];
+  return 0;
+}
+
+/* Residual derivatives of element e with respect to node k's parameters
+ * when k moves with its carried nodes: Jz[q][2]. */
+static void carried_jacobian(const opt *o, size_t k, size_t e, scratch *s, double *Jz) {
+  const hoc_mesh *m = o->m;
+  int np = o->np, nq = o->nq;
+  const size_t *cn = m->conn + e * (size_t)np;
+  hoc_element_residuals(o->t, o->measure, s->x, s->n, o->delta[e], s->r, s->J);
+  for (int q = 0; q < nq; ++q) Jz[2 * q] = Jz[2 * q + 1] = 0;
+  for (int i = 0; i < np; ++i) {
+    double w = cn[i] == k ? 1.0 : carry_weight(o, k, cn[i]);
+    if (w == 0) continue;
+    const double *dz = o->dz + 6 * cn[i];
+    for (int q = 0; q < nq; ++q) {
+      const double *j = s->J + 3 * ((size_t)q * np + (size_t)i);
+      Jz[2 * q] += w * (j[0] * dz[0] + j[1] * dz[1] + j[2] * dz[2]);
+      Jz[2 * q + 1] += w * (j[0] * dz[3] + j[1] * dz[4] + j[2] * dz[5]);
+    }
+  }
+}
+
 static void local_model(const opt *o, size_t k, scratch *s, double *f, double g[2], double H[3]) {
   int nd = o->ndof[k], nq = o->nq;
   const double *dz = o->dz + 6 * k;
+  int carried = o->carry_start[k + 1] > o->carry_start[k];
   *f = 0;
   g[0] = g[1] = H[0] = H[1] = H[2] = 0;
   for (size_t a = o->ne_start[k]; a < o->ne_start[k + 1]; ++a) {
     size_t e = o->ne_elem[a];
     int kk = o->ne_local[a];
-    gather(o, e, -1, NULL, NULL, s->x, s->n);
+    gather(o, e, s->x, s->n);
+    if (carried) {
+      double *Jz = s->J + 3 * (size_t)nq * (size_t)o->np; /* after the full Jacobian */
+      carried_jacobian(o, k, e, s, Jz);
+      for (int q = 0; q < nq; ++q) {
+        double r = s->r[q], z0 = Jz[2 * q], z1 = Jz[2 * q + 1];
+        *f += r * r;
+        g[0] += 2 * r * z0;
+        g[1] += 2 * r * z1;
+        H[0] += 2 * z0 * z0;
+        H[1] += 2 * z0 * z1;
+        H[2] += 2 * z1 * z1;
+      }
+      continue;
+    }
     hoc_element_residuals_node(o->t, o->measure, s->x, s->n, o->delta[e], kk, s->r, s->J);
     for (int q = 0; q < nq; ++q) {
       const double *j = s->J + 3 * q;
@@ -562,7 +708,14 @@ static int line_monotone(const opt *o, size_t l, size_t k, double tk) {
 }
 
 /* Local objective at the trial; 0 if the trial breaks a rule. */
-static int local_trial(const opt *o, size_t k, scratch *s, double *f) {
+static void set_moving(opt *o, size_t k, unsigned char v) {
+  o->moving[k] = v;
+  for (size_t j = o->carry_start[k]; j < o->carry_start[k + 1]; ++j) o->moving[o->carry_node[j]] = v;
+}
+
+/* Local objective at the trial of node k (and the nodes it carries); 0 if
+ * the trial breaks a rule. */
+static int local_trial_flagged(const opt *o, size_t k, scratch *s, double *f) {
   const hoc_mesh *m = o->m;
   int nq = o->nq;
   *f = 0;
@@ -571,19 +724,22 @@ static int local_trial(const opt *o, size_t k, scratch *s, double *f) {
       if (!line_monotone(o, o->nl_line[a], k, o->tpar[2 * k])) return 0;
   for (size_t a = o->ne_start[k]; a < o->ne_start[k + 1]; ++a) {
     size_t e = o->ne_elem[a];
-    int kk = o->ne_local[a];
-    size_t slot = m->elem_slot[e * (size_t)o->np + (size_t)kk];
-    gather(o, e, kk, o->txyz + 3 * k, o->tnormal + 3 * slot, s->x, s->n);
-    if (o->valid[e] && hoc_element_tangled(o->t, s->x, s->n)) return 0;
-    if (o->pvalid[e]) {
-      double uvk[2];
-      trial_elem_uv(o, k, e, kk, uvk);
-      if (!param_valid(o, e, kk, uvk, s->uv)) return 0;
-    }
-    hoc_element_residuals(o->t, o->measure, s->x, s->n, o->delta[e], s->r, NULL);
+    gather(o, e, s->x, s->n);
+    if (o->pvalid[e] && !param_valid(o, e, s->uv)) return 0;
+    double smin = hoc_element_residuals(o->t, o->measure, s->x, s->n, o->delta[e], s->r, NULL);
+    if (o->valid[e] && !o->region[e] &&
+        (!(smin > 0) || hoc_element_nodes_tangled(o->t, s->x, s->n)))
+      return 0;
     for (int q = 0; q < nq; ++q) *f += s->r[q] * s->r[q];
   }
   return isfinite(*f);
+}
+
+static int local_trial(opt *o, size_t k, scratch *s, double *f) {
+  set_moving(o, k, 1);
+  int ok = local_trial_flagged(o, k, s, f);
+  set_moving(o, k, 0);
+  return ok;
 }
 
 /* CAD evaluation of the trial parameters of the nodes in list[0..n). */
@@ -692,6 +848,13 @@ static void sort_by_entity(const hoc_mesh *m, size_t *list, size_t n, size_t *tm
   }
 }
 
+/* Node k touches an element that is (or was at the sweep's start) tangled. */
+static int near_tangled(const opt *o, size_t k) {
+  for (size_t a = o->ne_start[k]; a < o->ne_start[k + 1]; ++a)
+    if (o->region[o->ne_elem[a]] || !o->valid[o->ne_elem[a]]) return 1;
+  return 0;
+}
+
 /* One colour: a Gauss-Newton step per active node, then a common
  * backtracking line search. Returns the number of nodes moved. */
 static hoc_status do_color(opt *o, int color, scratch *scr, int nthreads, size_t *moved) {
@@ -745,8 +908,14 @@ static hoc_status do_color(opt *o, int color, scratch *scr, int nthreads, size_t
   size_t nt = 0;
   for (size_t a = 0; a < n; ++a)
     if (o->state[list[a]] == 1) list[nt++] = list[a];
-  size_t *tmp = hoc_calloc(nt + 1, sizeof *tmp);
-  HOC_CHECK(tmp, HOC_ERR_MEMORY, "out of memory");
+  size_t n_eval = 0;
+  for (size_t a = 0; a < nt; ++a) n_eval += 1 + o->carry_start[list[a] + 1] - o->carry_start[list[a]];
+  size_t *tmp = hoc_calloc(nt + 1, sizeof *tmp), *elist = hoc_calloc(n_eval + 1, sizeof *elist);
+  if (!tmp || !elist) {
+    free(tmp);
+    free(elist);
+    return HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
+  }
   sort_by_entity(m, list, nt, tmp);
   hoc_status status = HOC_OK;
   for (int attempt = 0; attempt < 10 && nt; ++attempt) {
@@ -768,11 +937,28 @@ static hoc_status do_color(opt *o, int color, scratch *scr, int nthreads, size_t
         }
         o->tpar[2 * k] = u;
         o->tpar[2 * k + 1] = v;
+        const hoc_cad_face *f = m->dim[k] == HOC_ON_FACE ? &o->model->faces[m->entity[k]] : NULL;
+        for (size_t j = o->carry_start[k]; j < o->carry_start[k + 1] && inside; ++j) {
+          size_t c = o->carry_node[j];
+          double w = o->alpha[k] * o->carry_w[j];
+          o->tpar[2 * c] = m->param[2 * c] + w * o->step[2 * k];
+          o->tpar[2 * c + 1] = m->param[2 * c + 1] + w * o->step[2 * k + 1];
+          for (int d = 0; d < 2; ++d)
+            if (!(f->period[d] > 0) && (o->tpar[2 * c + d] < f->lo[d] || o->tpar[2 * c + d] > f->hi[d]))
+              inside = 0;
+        }
         if (inside) break;
         o->alpha[k] *= 0.5;
       }
     }
-    HOC_TRY_GOTO(eval_trials(o, list, nt), done);
+    /* the nodes to evaluate: the trying ones and those they carry */
+    size_t ne_list = 0;
+    for (size_t a = 0; a < nt; ++a) {
+      size_t k = list[a];
+      elist[ne_list++] = k;
+      for (size_t j = o->carry_start[k]; j < o->carry_start[k + 1]; ++j) elist[ne_list++] = o->carry_node[j];
+    }
+    HOC_TRY_GOTO(eval_trials(o, elist, ne_list), done);
 #pragma omp parallel for schedule(dynamic, 16) num_threads(nthreads)
     for (size_t a = 0; a < nt; ++a) {
       size_t k = list[a];
@@ -781,6 +967,8 @@ static hoc_status do_color(opt *o, int color, scratch *scr, int nthreads, size_t
       int ok = local_trial(o, k, s, &f);
       if (ok && f <= o->f0[k] + 1e-4 * o->alpha[k] * o->slope[k]) {
         commit(o, k);
+        for (size_t j = o->carry_start[k]; j < o->carry_start[k + 1]; ++j) commit(o, o->carry_node[j]);
+        o->fnew[k] = f;
         o->state[k] = 2;
       } else {
         o->alpha[k] *= 0.5;
@@ -791,12 +979,13 @@ static hoc_status do_color(opt *o, int color, scratch *scr, int nthreads, size_t
       size_t k = list[a];
       if (o->state[k] == 2) {
         ++*moved;
+        o->state[k] = 0;
+        if (o->f0[k] - o->fnew[k] < o->min_gain && !near_tangled(o, k)) continue;
         /* wake the neighbours (and the node itself) for the next sweep */
         for (size_t b = o->ne_start[k]; b < o->ne_start[k + 1]; ++b) {
           const size_t *cn = m->conn + o->ne_elem[b] * (size_t)o->np;
           for (int i = 0; i < o->np; ++i) o->active[cn[i]] = 1;
         }
-        o->state[k] = 0;
       } else {
         list[keep++] = k; /* order by entity is kept */
       }
@@ -812,14 +1001,15 @@ static hoc_status do_color(opt *o, int color, scratch *scr, int nthreads, size_t
     for (size_t b = o->ne_start[k]; b < o->ne_start[k + 1]; ++b) {
       size_t e = o->ne_elem[b];
       if (!o->valid[e]) {
-        gather(o, e, -1, NULL, NULL, s->x, s->n);
+        gather(o, e, s->x, s->n);
         o->valid[e] = (unsigned char)!hoc_element_tangled(o->t, s->x, s->n);
       }
-      if (!o->pvalid[e]) o->pvalid[e] = (unsigned char)param_valid(o, e, -1, NULL, s->uv);
+      if (!o->pvalid[e]) o->pvalid[e] = (unsigned char)param_valid(o, e, s->uv);
     }
   }
 done:
   free(tmp);
+  free(elist);
   return status;
 }
 
@@ -831,7 +1021,7 @@ static hoc_status scratch_alloc(const opt *o, int nthreads, scratch **out) {
     s[i].x = hoc_calloc(3 * np, sizeof(double));
     s[i].n = hoc_calloc(3 * np, sizeof(double));
     s[i].r = hoc_calloc(nq, sizeof(double));
-    s[i].J = hoc_calloc(3 * nq * np, sizeof(double));
+    s[i].J = hoc_calloc(3 * nq * np + 2 * nq, sizeof(double));
     s[i].uv = hoc_calloc(2 * np, sizeof(double));
     if (!s[i].x || !s[i].n || !s[i].r || !s[i].J || !s[i].uv) {
       for (int j = 0; j <= i; ++j) {
@@ -868,7 +1058,7 @@ hoc_status hoc_mesh_optimize(hoc_mesh *mesh, const hoc_optimize_options *options
   hoc_optimize_options_default(&o);
   if (options) o = *options;
   if (o.max_iterations <= 0) o.max_iterations = 100;
-  if (!(o.tolerance > 0)) o.tolerance = 1e-4;
+  if (!(o.tolerance > 0)) o.tolerance = 0.1;
   HOC_CHECK(o.measure == HOC_MEASURE_SHAPE || o.measure == HOC_MEASURE_ODDY, HOC_ERR_ARGUMENT,
             "unknown distortion measure %d", (int)o.measure);
   HOC_CHECK(o.max_iterations <= 1000000, HOC_ERR_ARGUMENT, "too many iterations requested");
@@ -895,13 +1085,21 @@ hoc_status hoc_mesh_optimize(hoc_mesh *mesh, const hoc_optimize_options *options
   res.tangled_initial = tangled;
   for (int it = 1; it <= o.max_iterations; ++it) {
     size_t moved = 0;
+    /* nodes of tangled elements never sleep */
+    for (size_t e = 0; e < mesh->n_elems; ++e)
+      if (ctx.delta[e] > 0)
+        for (int i = 0; i < ctx.np; ++i) {
+          size_t node = mesh->conn[e * (size_t)ctx.np + (size_t)i];
+          if (ctx.ndof[node]) ctx.active[node] = 1;
+        }
+    /* moves worth a small fraction of the average node's share of f keep
+     * their neighbourhood active; the rest of the mesh settles */
+    ctx.min_gain = o.tolerance * f / (double)(res.free_nodes ? res.free_nodes : 1);
     for (int c = 0; c < ctx.n_colors; ++c) {
       size_t mc;
       HOC_TRY_GOTO(do_color(&ctx, c, scr, nthreads, &mc), done);
       moved += mc;
     }
-    double f_prev = f;
-    size_t tangled_prev = tangled;
     HOC_TRY_GOTO(sweep_start(&ctx, &f, &qmin, &tangled), done);
     res.iterations = it;
     if (o.progress) {
@@ -911,9 +1109,10 @@ hoc_status hoc_mesh_optimize(hoc_mesh *mesh, const hoc_optimize_options *options
         goto done;
       }
     }
-    /* while something was tangled, f changed definition (delta): compare
-     * only sweeps with the same regularisation */
-    if (!moved || (tangled == 0 && tangled_prev == 0 && f_prev - f <= o.tolerance * f_prev)) {
+    /* converged: no node can lower f by a worthwhile amount any more */
+    size_t active = 0;
+    for (size_t i = 0; i < mesh->n_nodes; ++i) active += ctx.active[i];
+    if (!active || !moved) {
       res.converged = tangled == 0;
       break;
     }
@@ -930,24 +1129,32 @@ done:
 
 /* Gradient check -------------------------------------------------------- */
 
+
+
 /* Local objective of node k with its position at parameters z (positions
  * evaluated on the CAD; normals kept). */
 static hoc_status local_f_at(opt *o, size_t k, const double *z, scratch *s, double *f) {
   hoc_mesh *m = o->m;
-  double x[3];
-  if (m->dim[k] == HOC_ON_FACE)
-    HOC_TRY(hoc_cad_face_eval(o->model, m->entity[k], 1, z, x, NULL, NULL));
-  else
-    HOC_TRY(hoc_cad_curve_eval(o->model, m->entity[k], 1, z, x, NULL));
+  size_t list[1 + 4 * (HOC_MAX_ORDER + 1) * (HOC_MAX_ORDER + 2)], n = 0;
+  list[n++] = k;
+  o->tpar[2 * k] = z[0];
+  o->tpar[2 * k + 1] = m->dim[k] == HOC_ON_FACE ? z[1] : 0;
+  for (size_t j = o->carry_start[k]; j < o->carry_start[k + 1]; ++j) {
+    size_t c = o->carry_node[j];
+    for (int d = 0; d < 2; ++d)
+      o->tpar[2 * c + d] = m->param[2 * c + d] + o->carry_w[j] * (z[d] - m->param[2 * k + d]);
+    if (n < sizeof list / sizeof *list) list[n++] = c;
+  }
+  HOC_TRY(eval_trials(o, list, n));
+  set_moving(o, k, 1);
   *f = 0;
   for (size_t a = o->ne_start[k]; a < o->ne_start[k + 1]; ++a) {
     size_t e = o->ne_elem[a];
-    int kk = o->ne_local[a];
-    size_t slot = m->elem_slot[e * (size_t)o->np + (size_t)kk];
-    gather(o, e, kk, x, o->normal + 3 * slot, s->x, s->n);
+    gather(o, e, s->x, s->n);
     hoc_element_residuals(o->t, o->measure, s->x, s->n, o->delta[e], s->r, NULL);
     for (int q = 0; q < o->nq; ++q) *f += s->r[q] * s->r[q];
   }
+  set_moving(o, k, 0);
   return HOC_OK;
 }
 
@@ -970,7 +1177,7 @@ hoc_status hoc_mesh_check_gradient(hoc_mesh *mesh, hoc_measure measure, int fix_
   size_t n_free = 0;
   for (size_t i = 0; i < mesh->n_nodes; ++i) n_free += ctx.ndof[i] > 0;
   size_t stride = n_free > (size_t)samples ? n_free / (size_t)samples : 1;
-  double worst = 0;
+  double worst = 0, gmax = 0;
   size_t seen = 0;
   for (size_t k = 0; k < mesh->n_nodes; ++k) {
     if (!ctx.ndof[k]) continue;
@@ -982,7 +1189,7 @@ hoc_status hoc_mesh_check_gradient(hoc_mesh *mesh, hoc_measure measure, int fix_
       const double *dz = ctx.dz + 6 * k + 3 * d;
       double speed = sqrt(dz[0] * dz[0] + dz[1] * dz[1] + dz[2] * dz[2]);
       if (!(speed > 0)) continue;
-      double h = 1e-6 * ctx.hsize[k] / speed;
+      double h = 1e-5 * ctx.hsize[k] / speed;
       double zp[2] = {mesh->param[2 * k], mesh->param[2 * k + 1]}, zm[2];
       memcpy(zm, zp, sizeof zm);
       zp[d] += h;
@@ -991,11 +1198,14 @@ hoc_status hoc_mesh_check_gradient(hoc_mesh *mesh, hoc_measure measure, int fix_
       HOC_TRY_GOTO(local_f_at(&ctx, k, zp, scr, &fp), done);
       HOC_TRY_GOTO(local_f_at(&ctx, k, zm, scr, &fm), done);
       double fd = (fp - fm) / (2 * h);
-      double scale = fabs(fd) + fabs(g[d]) + 1e-8 * (fl + 1e-300) / h;
-      double err = fabs(fd - g[d]) / scale;
-      if (isfinite(fd) && err > worst) worst = err;
+      if (!isfinite(fd)) continue;
+      /* in parameter units: scaled by the node's speed to compare nodes */
+      worst = fmax(worst, fabs(fd - g[d]) / speed);
+      gmax = fmax(gmax, fabs(g[d]) / speed);
     }
   }
+  /* a norm-wise relative error, as PETSc's -snes_test_jacobian reports */
+  worst = gmax > 0 ? worst / gmax : worst;
   *max_rel_error = worst;
 done:
   scratch_free(scr, 1);

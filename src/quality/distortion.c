@@ -192,6 +192,11 @@ int hoc_element_tangled(const hoc_quality_tables *t, const double *x, const doub
     cross(a1, a2, c);
     if (!(dot(c, nq) > 0) || !(dot(c, c) > 0)) return 1;
   }
+  return hoc_element_nodes_tangled(t, x, n);
+}
+
+int hoc_element_nodes_tangled(const hoc_quality_tables *t, const double *x, const double *n) {
+  int np = t->np;
   for (int j = 0; j < np; ++j) {
     double a1[3], a2[3], c[3];
     jacobian_at(np, x, t->Gn + 2 * (size_t)j * np, a1, a2);

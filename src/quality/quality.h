@@ -87,4 +87,8 @@ double hoc_element_residuals_node(const hoc_quality_tables *t, hoc_measure measu
  *  quadrature point or a node. Same test as hoc_element_quality. */
 int hoc_element_tangled(const hoc_quality_tables *t, const double *x, const double *n);
 
+/** The node half of that test: 1 if sigma <= 0 at a node. (The residual
+ *  functions return the quadrature half as their smallest sigma.) */
+int hoc_element_nodes_tangled(const hoc_quality_tables *t, const double *x, const double *n);
+
 #endif
