@@ -5,19 +5,26 @@
  * Objective: f(z) = sum_e sum_q r_eq^2, r_eq = sqrt(w_q) (eta(x~_q) - 1), the
  * quadrature of sum_e int_{t_I} (eta - 1)^2 (weights normalised per element),
  * with sigma replaced by sigma_delta = (sigma + sqrt(sigma^2 + 4 delta_e^2))/2
- * on elements that are tangled at the start of a sweep (Escobar et al.).
+ * on tangled elements and their neighbours (Escobar et al.), where the
+ * nodes also count as sample points (Definition 2 asks det > 0 there).
  * Unknowns z: (u, v) of face-interior nodes, t of nodes on CAD curves.
  * Positions x(z) = phi(u, v) or c(t) are always CAD evaluations.
  *
- * Solver: nonlinear block Gauss-Seidel. The free nodes are coloured so that
- * no two nodes of a colour share an element; each colour takes one damped
- * Gauss-Newton step per node on its local objective (the elements around
- * it), with a backtracking line search that rejects any step that tangles a
- * valid element, folds an element in the parameter plane (so a node never
- * leaves its face's domain), or reorders nodes along a curve. Nodes of a
- * colour are independent: they are updated in parallel and the result does
- * not depend on the thread count. CAD evaluations are batched per colour.
+ * Solver: nonlinear block Gauss-Seidel on natural blocks of the high-order
+ * mesh: each vertex of the linear mesh (a face-interior vertex carries the
+ * high-order nodes of its star along, displaced in (u,v) by their
+ * barycentric weight, so the star moves as a whole), the nodes inside each
+ * element edge, and the nodes inside each element. A block takes a damped
+ * Gauss-Newton step on the elements it touches (a small dense system),
+ * followed by a backtracking line search that rejects any step that tangles
+ * a valid element, folds an element in the parameter plane (so no node
+ * leaves its face's domain) or reorders nodes along a curve. Blocks are
+ * coloured so that blocks of a colour touch no common element: they are
+ * updated in parallel and the result does not depend on the thread count.
+ * A block whose step lowers f by less than a small share of f goes to
+ * sleep; the iteration ends when every block sleeps.
  */
+#include "core/hash.h"
 #include "mesh/mesh.h"
 #include "quality/quality.h"
 
@@ -56,9 +63,21 @@ typedef struct opt {
   size_t *ns_slot;
   size_t *nl_start;     /* [n_nodes+1] node -> lines */
   size_t *nl_line;
+  /* blocks */
+  size_t n_blocks;
+  size_t *bn_start, *bn_node; /* block -> its nodes */
+  size_t *be_start, *be_elem; /* block -> the elements it touches */
+  size_t *bd_start;     /* block -> first of its unknowns in step[] */
+  size_t *node_block;   /* [n_nodes] block of a free node (SIZE_MAX if fixed) */
+  int *node_off;        /* [n_nodes] offset of the node's unknowns in its block */
+  size_t *carry_start;  /* [n_blocks+1] nodes a vertex block carries ... */
+  size_t *carry_node;
+  double *carry_w;      /* ... and their weights */
+  int max_nd;           /* most unknowns in a block */
   int n_colors;
   size_t *color_start;  /* [n_colors+1] */
-  size_t *color_node;
+  size_t *color_block;
+  /* state */
   double *dz;           /* [n_nodes][6] dx/dz: (phi_u, phi_v) or (c', 0) */
   double *normal;       /* [n_slots][3] unit CAD normal at each slot, oriented */
   double *delta;        /* [n_elems] regularisation of the sweep */
@@ -68,66 +87,35 @@ typedef struct opt {
                            free to pass through sigma = 0 during the sweep */
   double *hsize;        /* [n_nodes] local length: bound on one step's displacement */
   unsigned char *active;/* [n_nodes] */
-  double min_gain;      /* a move that lowers f by less does not wake the neighbours */
+  double min_gain;      /* per node: a step that lowers f by less puts the block to sleep */
   unsigned char *moving;/* [n_nodes] use the trial state of this node */
-  size_t *carry_start;  /* [n_nodes+1] face-interior vertex -> the high-order nodes of its */
-  size_t *carry_node;   /*   star, moved with it in (u,v) ... */
-  double *carry_w;      /*   ... by their barycentric weight of the vertex */
-  double *fnew;         /* [n_nodes] local objective after an accepted move */
-  /* per-node trial state of the colour being processed */
-  double *step;         /* [n_nodes][2] Gauss-Newton direction */
-  double *alpha;        /* [n_nodes] step length */
-  double *f0;           /* [n_nodes] local objective before */
-  double *slope;        /* [n_nodes] g . step (< 0) */
+  /* trial state */
+  double *step;         /* [unknowns] Gauss-Newton direction of each block */
+  double *alpha;        /* [n_blocks] step length */
+  double *f0, *fnew;    /* [n_blocks] local objective before / after */
+  double *slope;        /* [n_blocks] g . step (< 0) */
+  unsigned char *state; /* [n_blocks] 0 idle, 1 trying, 2 accepted */
+  size_t *list;         /* [n_blocks] scratch */
   double *tpar;         /* [n_nodes][2] trial parameters */
   double *txyz;         /* [n_nodes][3] */
   double *tdz;          /* [n_nodes][6] */
   double *tslot_uv;     /* [n_slots][2] */
   double *tnormal;      /* [n_slots][3] */
-  unsigned char *state; /* [n_nodes] 0 idle, 1 trying, 2 accepted */
-  size_t *list;         /* [n_nodes] scratch */
-  size_t max_star;      /* largest number of elements around a node */
 } opt;
 
 typedef struct scratch {
-  double *x, *n, *r, *J, *uv;
+  double *x, *n, *r, *J, *uv, *Jz, *H, *g, *L;
 } scratch;
 
 static void opt_free(opt *o) {
-  free(o->ndof);
-  free(o->ne_start);
-  free(o->ne_elem);
-  free(o->ne_local);
-  free(o->ns_start);
-  free(o->ns_slot);
-  free(o->nl_start);
-  free(o->nl_line);
-  free(o->color_start);
-  free(o->color_node);
-  free(o->dz);
-  free(o->normal);
-  free(o->delta);
-  free(o->valid);
-  free(o->pvalid);
-  free(o->region);
-  free(o->hsize);
-  free(o->active);
-  free(o->fnew);
-  free(o->moving);
-  free(o->carry_start);
-  free(o->carry_node);
-  free(o->carry_w);
-  free(o->step);
-  free(o->alpha);
-  free(o->f0);
-  free(o->slope);
-  free(o->tpar);
-  free(o->txyz);
-  free(o->tdz);
-  free(o->tslot_uv);
-  free(o->tnormal);
-  free(o->state);
-  free(o->list);
+  void *p[] = {o->ndof, o->ne_start, o->ne_elem, o->ne_local, o->ns_start, o->ns_slot,
+               o->nl_start, o->nl_line, o->bn_start, o->bn_node, o->be_start, o->be_elem,
+               o->bd_start, o->node_block, o->node_off, o->carry_start, o->carry_node,
+               o->carry_w, o->color_start, o->color_block, o->dz, o->normal, o->delta,
+               o->valid, o->pvalid, o->region, o->hsize, o->active, o->moving, o->step,
+               o->alpha, o->f0, o->fnew, o->slope, o->state, o->list, o->tpar, o->txyz,
+               o->tdz, o->tslot_uv, o->tnormal};
+  for (size_t i = 0; i < sizeof p / sizeof *p; ++i) free(p[i]);
 }
 
 /* CSR from (key, value) pairs produced by a callback-free double pass. */
@@ -185,7 +173,214 @@ static hoc_status face_normal(const opt *o, int f, const double *uv, const doubl
 
 /* Setup ------------------------------------------------------------------- */
 
-static hoc_status build_carry(opt *o);
+/* Append node to block b's list if free and not there yet. */
+typedef struct growlist {
+  size_t *v;
+  size_t n, cap;
+} growlist;
+
+static hoc_status grow_push(growlist *g, size_t x) {
+  if (g->n == g->cap) {
+    size_t cap = g->cap ? 2 * g->cap : 256;
+    size_t *v = hoc_realloc(g->v, cap, sizeof *v);
+    HOC_CHECK(v, HOC_ERR_MEMORY, "out of memory for the optimiser's blocks");
+    g->v = v;
+    g->cap = cap;
+  }
+  g->v[g->n++] = x;
+  return HOC_OK;
+}
+
+/* Blocks: vertices, edges, element interiors; their nodes, footprints,
+ * unknowns and carried nodes. */
+static hoc_status build_blocks(opt *o) {
+  hoc_mesh *m = o->m;
+  size_t nn = m->n_nodes, ne = m->n_elems, np = (size_t)o->np;
+  int p = m->order;
+  HOC_ALLOC(o->node_block, nn);
+  HOC_ALLOC(o->node_off, nn);
+  for (size_t i = 0; i < nn; ++i) o->node_block[i] = SIZE_MAX;
+  hoc_hash edges = {0};
+  growlist start = {0}, nodes = {0};
+  hoc_status status = HOC_OK;
+  HOC_TRY_GOTO(hoc_hash_init(&edges, 2 * ne), done);
+  /* vertex blocks first, then edge blocks, then interior blocks */
+  for (int kind = 0; kind < 3; ++kind)
+    for (size_t e = 0; e < ne; ++e) {
+      const size_t *cn = m->conn + e * np;
+      if (kind == 0) {
+        for (int k = 0; k < 3; ++k) {
+          size_t i = cn[k];
+          if (!o->ndof[i] || o->node_block[i] != SIZE_MAX) continue;
+          o->node_block[i] = start.n;
+          HOC_TRY_GOTO(grow_push(&start, nodes.n), done);
+          HOC_TRY_GOTO(grow_push(&nodes, i), done);
+        }
+      } else if (kind == 1) {
+        for (int k = 0; k < 3 && p > 1; ++k) {
+          int found;
+          HOC_TRY_GOTO(hoc_hash_insert(&edges, hoc_pair_key(cn[k], cn[(k + 1) % 3]), 0, &found, NULL), done);
+          if (found) continue;
+          size_t first = nodes.n;
+          for (int j = 0; j < p - 1; ++j) {
+            size_t i = cn[3 + k * (p - 1) + j];
+            if (!o->ndof[i] || o->node_block[i] != SIZE_MAX) continue;
+            if (nodes.n == first) HOC_TRY_GOTO(grow_push(&start, nodes.n), done);
+            o->node_block[i] = start.n - 1;
+            HOC_TRY_GOTO(grow_push(&nodes, i), done);
+          }
+        }
+      } else {
+        size_t first = nodes.n;
+        for (size_t k = 3 * (size_t)p; k < np; ++k) {
+          size_t i = cn[k];
+          if (!o->ndof[i] || o->node_block[i] != SIZE_MAX) continue;
+          if (nodes.n == first) HOC_TRY_GOTO(grow_push(&start, nodes.n), done);
+          o->node_block[i] = start.n - 1;
+          HOC_TRY_GOTO(grow_push(&nodes, i), done);
+        }
+      }
+    }
+  size_t nb = start.n;
+  o->n_blocks = nb;
+  HOC_TRY_GOTO(grow_push(&start, nodes.n), done);
+  o->bn_start = start.v;
+  o->bn_node = nodes.v;
+  start.v = nodes.v = NULL;
+  /* unknowns */
+  o->bd_start = hoc_calloc(nb + 1, sizeof *o->bd_start);
+  if (!o->bd_start) {
+    status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
+    goto done;
+  }
+  for (size_t b = 0; b < nb; ++b) {
+    int off = 0;
+    for (size_t a = o->bn_start[b]; a < o->bn_start[b + 1]; ++a) {
+      o->node_off[o->bn_node[a]] = off;
+      off += o->ndof[o->bn_node[a]];
+    }
+    o->bd_start[b + 1] = o->bd_start[b] + (size_t)off;
+    if (off > o->max_nd) o->max_nd = off;
+  }
+  /* footprints: the elements of the block's nodes */
+  {
+    growlist fs = {0}, fe = {0};
+    for (size_t b = 0; b < nb && status == HOC_OK; ++b) {
+      status = grow_push(&fs, fe.n);
+      for (size_t a = o->bn_start[b]; a < o->bn_start[b + 1] && status == HOC_OK; ++a) {
+        size_t i = o->bn_node[a];
+        for (size_t c = o->ne_start[i]; c < o->ne_start[i + 1] && status == HOC_OK; ++c) {
+          size_t e = o->ne_elem[c];
+          int seen = 0;
+          for (size_t d = fs.v[b]; d < fe.n && !seen; ++d) seen = fe.v[d] == e;
+          if (!seen) status = grow_push(&fe, e);
+        }
+      }
+    }
+    if (status == HOC_OK) status = grow_push(&fs, fe.n);
+    o->be_start = fs.v;
+    o->be_elem = fe.v;
+    if (status != HOC_OK) goto done;
+  }
+  /* carried nodes of face-interior vertex blocks */
+  {
+    growlist cs = {0}, cn = {0};
+    growlist cw = {0}; /* weights stored as bit patterns of doubles would be opaque: separate array */
+    (void)cw;
+    double *w = NULL;
+    size_t wcap = 0;
+    for (size_t b = 0; b < nb && status == HOC_OK; ++b) {
+      status = grow_push(&cs, cn.n);
+      size_t k = o->bn_node[o->bn_start[b]];
+      int vertex = o->bn_start[b + 1] - o->bn_start[b] == 1 && p >= 2 && o->ndof[k] == 2;
+      for (size_t a = o->ne_start[k]; a < o->ne_start[k + 1] && vertex; ++a) vertex = o->ne_local[a] < 3;
+      if (!vertex) continue;
+      for (size_t a = o->ne_start[k]; a < o->ne_start[k + 1] && status == HOC_OK; ++a) {
+        size_t e = o->ne_elem[a];
+        int kk = o->ne_local[a];
+        for (size_t i = 3; i < np && status == HOC_OK; ++i) {
+          size_t node = m->conn[e * np + i];
+          if (o->ndof[node] != 2 || m->entity[node] != m->entity[k]) continue;
+          double r = o->t->rs[2 * i], s = o->t->rs[2 * i + 1];
+          double lam = kk == 0 ? 1 - r - s : kk == 1 ? r : s;
+          if (!(lam > 1e-12)) continue;
+          int seen = 0;
+          for (size_t j = cs.v[b]; j < cn.n && !seen; ++j) seen = cn.v[j] == node;
+          if (seen) continue;
+          status = grow_push(&cn, node);
+          if (status != HOC_OK) break;
+          if (cn.n > wcap) {
+            wcap = cn.cap;
+            double *w2 = hoc_realloc(w, wcap, sizeof *w2);
+            if (!w2) {
+              status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
+              break;
+            }
+            w = w2;
+          }
+          w[cn.n - 1] = lam;
+        }
+      }
+    }
+    if (status == HOC_OK) status = grow_push(&cs, cn.n);
+    o->carry_start = cs.v;
+    o->carry_node = cn.v;
+    o->carry_w = w;
+    if (status != HOC_OK) goto done;
+  }
+  /* colours: blocks touching a common element differ; every element's
+   * blocks are the blocks of its nodes */
+  {
+    int *color = hoc_calloc(nb + 1, sizeof *color);
+    size_t cap = 64, *stamp = hoc_calloc(cap, sizeof *stamp);
+    int max_colors = 0;
+    if (!color || !stamp) {
+      free(color);
+      free(stamp);
+      status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
+      goto done;
+    }
+    for (size_t b = 0; b < nb; ++b) color[b] = -1;
+    for (size_t b = 0; b < nb && status == HOC_OK; ++b) {
+      for (size_t a = o->be_start[b]; a < o->be_start[b + 1]; ++a) {
+        const size_t *cn = m->conn + o->be_elem[a] * np;
+        for (size_t k = 0; k < np; ++k) {
+          size_t b2 = o->node_block[cn[k]];
+          if (b2 != SIZE_MAX && color[b2] >= 0) stamp[color[b2]] = b + 1;
+        }
+      }
+      int c = 0;
+      while ((size_t)c < cap && stamp[c] == b + 1) ++c;
+      if ((size_t)c >= cap) {
+        size_t *s2 = hoc_realloc(stamp, 2 * cap, sizeof *s2);
+        if (!s2) {
+          status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
+          break;
+        }
+        stamp = s2;
+        memset(stamp + cap, 0, cap * sizeof *stamp);
+        cap *= 2;
+      }
+      color[b] = c;
+      if (c + 1 > max_colors) max_colors = c + 1;
+    }
+    o->n_colors = max_colors;
+    if (status == HOC_OK) status = csr_alloc((size_t)max_colors, nb, &o->color_start, &o->color_block);
+    if (status == HOC_OK) {
+      for (size_t b = 0; b < nb; ++b) o->color_start[color[b] + 1]++;
+      csr_finish_counts((size_t)max_colors, o->color_start);
+      for (size_t b = 0; b < nb; ++b) o->color_block[o->color_start[color[b]]++] = b;
+      csr_restore((size_t)max_colors, o->color_start);
+    }
+    free(color);
+    free(stamp);
+  }
+done:
+  hoc_hash_free(&edges);
+  free(start.v);
+  free(nodes.v);
+  return status;
+}
 
 static hoc_status setup(opt *o, hoc_mesh *m, hoc_measure measure, int fix_curves) {
   memset(o, 0, sizeof *o);
@@ -227,9 +422,9 @@ static hoc_status setup(opt *o, hoc_mesh *m, hoc_measure measure, int fix_curves
     if (m->dim[i] == HOC_ON_FACE) o->ndof[i] = 2;
     else if (m->dim[i] == HOC_ON_CURVE && !fix_curves && !m->model->curves[m->entity[i]].degenerate)
       o->ndof[i] = 1;
-    size_t star = o->ne_start[i + 1] - o->ne_start[i];
-    if (star > o->max_star) o->max_star = star;
   }
+  HOC_TRY(build_blocks(o));
+  size_t nb = o->n_blocks;
   HOC_ALLOC(o->dz, 6 * nn);
   HOC_ALLOC(o->normal, 3 * m->n_slots + 3);
   HOC_ALLOC(o->delta, ne);
@@ -238,133 +433,26 @@ static hoc_status setup(opt *o, hoc_mesh *m, hoc_measure measure, int fix_curves
   HOC_ALLOC(o->region, ne);
   HOC_ALLOC(o->hsize, nn);
   HOC_ALLOC(o->active, nn);
-  HOC_ALLOC(o->fnew, nn);
   HOC_ALLOC(o->moving, nn);
-  HOC_ALLOC(o->step, 2 * nn);
-  HOC_ALLOC(o->alpha, nn);
-  HOC_ALLOC(o->f0, nn);
-  HOC_ALLOC(o->slope, nn);
+  HOC_ALLOC(o->step, o->bd_start[nb] + 1);
+  HOC_ALLOC(o->alpha, nb + 1);
+  HOC_ALLOC(o->f0, nb + 1);
+  HOC_ALLOC(o->fnew, nb + 1);
+  HOC_ALLOC(o->slope, nb + 1);
+  HOC_ALLOC(o->state, nb + 1);
+  HOC_ALLOC(o->list, nb + 1);
   HOC_ALLOC(o->tpar, 2 * nn);
   HOC_ALLOC(o->txyz, 3 * nn);
   HOC_ALLOC(o->tdz, 6 * nn);
   HOC_ALLOC(o->tslot_uv, 2 * m->n_slots + 2);
   HOC_ALLOC(o->tnormal, 3 * m->n_slots + 3);
-  HOC_ALLOC(o->state, nn);
-  HOC_ALLOC(o->list, nn);
   /* local length: the longest edge of the linear sub-triangles around */
-  for (size_t i = 0; i < nn; ++i) o->hsize[i] = 0;
   for (size_t e = 0; e < ne; ++e) {
     const size_t *cn = m->conn + e * np;
     double h = 0;
     for (int k = 0; k < 3; ++k) h = fmax(h, dist3(m->xyz + 3 * cn[k], m->xyz + 3 * cn[(k + 1) % 3]));
     for (size_t k = 0; k < np; ++k) o->hsize[cn[k]] = fmax(o->hsize[cn[k]], h);
   }
-  /* greedy colouring of the free nodes: neighbours share an element */
-  int *color = hoc_calloc(nn, sizeof *color);
-  size_t *stamp = NULL, *count = NULL;
-  int max_colors = 0;
-  hoc_status status = HOC_OK;
-  if (!color) return HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
-  size_t cap = 64;
-  stamp = hoc_calloc(cap, sizeof *stamp);
-  if (!stamp) {
-    free(color);
-    return HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
-  }
-  for (size_t i = 0; i < nn; ++i) color[i] = -1;
-  for (size_t i = 0; i < nn; ++i) {
-    if (!o->ndof[i]) continue;
-    for (size_t a = o->ne_start[i]; a < o->ne_start[i + 1]; ++a) {
-      const size_t *cn = m->conn + o->ne_elem[a] * np;
-      for (size_t k = 0; k < np; ++k) {
-        int c = color[cn[k]];
-        if (c >= 0) stamp[c] = i + 1;
-      }
-    }
-    int c = 0;
-    while ((size_t)c < cap && stamp[c] == i + 1) ++c;
-    if ((size_t)c >= cap) {
-      size_t *s2 = hoc_realloc(stamp, 2 * cap, sizeof *s2);
-      if (!s2) {
-        status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
-        goto done;
-      }
-      stamp = s2;
-      memset(stamp + cap, 0, cap * sizeof *stamp);
-      cap *= 2;
-    }
-    color[i] = c;
-    if (c + 1 > max_colors) max_colors = c + 1;
-  }
-  o->n_colors = max_colors;
-  count = hoc_calloc((size_t)max_colors + 1, sizeof *count);
-  if (!count) {
-    status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
-    goto done;
-  }
-  HOC_TRY_GOTO(csr_alloc((size_t)max_colors, nn, &o->color_start, &o->color_node), done);
-  for (size_t i = 0; i < nn; ++i)
-    if (color[i] >= 0) o->color_start[color[i] + 1]++;
-  csr_finish_counts((size_t)max_colors, o->color_start);
-  for (size_t i = 0; i < nn; ++i)
-    if (color[i] >= 0) o->color_node[o->color_start[color[i]]++] = i;
-  csr_restore((size_t)max_colors, o->color_start);
-  HOC_TRY_GOTO(build_carry(o), done);
-done:
-  free(color);
-  free(stamp);
-  free(count);
-  return status;
-}
-
-/* Carried moves: a free face-interior vertex of the linear mesh (a node at
- * a corner of every element around it) moves with the free high-order
- * nodes of its star, each displaced in (u,v) by the vertex's barycentric
- * weight at its reference position. Those nodes lie only in the star, so
- * vertices of one colour carry disjoint sets. */
-static hoc_status build_carry(opt *o) {
-  hoc_mesh *m = o->m;
-  size_t nn = m->n_nodes, np = (size_t)o->np;
-  HOC_ALLOC(o->carry_start, nn + 1);
-  if (m->order < 2) return HOC_OK;
-  size_t total = 0;
-  for (size_t k = 0; k < nn; ++k) {
-    if (o->ndof[k] != 2) continue;
-    int corner = 1;
-    for (size_t a = o->ne_start[k]; a < o->ne_start[k + 1]; ++a) corner &= o->ne_local[a] < 3;
-    if (!corner) continue;
-    /* an upper bound: every high-order node of every element of the star */
-    total += (o->ne_start[k + 1] - o->ne_start[k]) * (np - 3);
-  }
-  HOC_ALLOC(o->carry_node, total + 1);
-  HOC_ALLOC(o->carry_w, total + 1);
-  size_t n = 0;
-  for (size_t k = 0; k < nn; ++k) {
-    o->carry_start[k] = n;
-    if (o->ndof[k] != 2) continue;
-    int corner = 1;
-    for (size_t a = o->ne_start[k]; a < o->ne_start[k + 1]; ++a) corner &= o->ne_local[a] < 3;
-    if (!corner) continue;
-    size_t first = n;
-    for (size_t a = o->ne_start[k]; a < o->ne_start[k + 1]; ++a) {
-      size_t e = o->ne_elem[a];
-      int kk = o->ne_local[a];
-      for (size_t i = 3; i < np; ++i) {
-        size_t node = m->conn[e * np + i];
-        if (o->ndof[node] != 2 || m->entity[node] != m->entity[k]) continue;
-        double r = o->t->rs[2 * i], t = o->t->rs[2 * i + 1];
-        double lam = kk == 0 ? 1 - r - t : kk == 1 ? r : t;
-        if (!(lam > 1e-12)) continue;
-        int seen = 0;
-        for (size_t j = first; j < n && !seen; ++j) seen = o->carry_node[j] == node;
-        if (seen) continue;
-        o->carry_node[n] = node;
-        o->carry_w[n] = lam;
-        ++n;
-      }
-    }
-  }
-  o->carry_start[nn] = n;
   return HOC_OK;
 }
 
@@ -495,6 +583,21 @@ static void sigma_stats(const opt *o, const double *x, const double *n, double *
   *scale = sum;
 }
 
+/* Residuals of element e's objective: the quadrature points, and in the
+ * tangled region also the nodes (Definition 2 asks det > 0 there too).
+ * r: [nq + np], J: [nq + np][np][3] or NULL. Returns the count and sets
+ * *smin to the smallest sigma / |D phi|^2 over the quadrature points. */
+static int elem_residuals(const opt *o, size_t e, const double *x, const double *n, double *r,
+                          double *J, double *smin) {
+  int nq = o->nq, np = o->np;
+  double s = hoc_element_residuals(o->t, o->measure, x, n, o->delta[e], r, J);
+  if (smin) *smin = s;
+  if (!o->region[e]) return nq;
+  hoc_element_node_residuals(o->t, o->measure, x, n, o->delta[e], r + nq,
+                             J ? J + 3 * (size_t)nq * (size_t)np : NULL);
+  return nq + np;
+}
+
 /* Per-element state at the start of a sweep: validity, parametric
  * validity, regularisation; also f, q and the tangled count. */
 static hoc_status sweep_start(opt *o, double *objective, double *min_q, size_t *tangled) {
@@ -508,6 +611,7 @@ static hoc_status sweep_start(opt *o, double *objective, double *min_q, size_t *
     return HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
   }
   int failed = 0;
+  memset(o->region, 0, ne); /* this sweep's region is found below */
 #pragma omp parallel
   {
     double *x = malloc((6 * (size_t)np + (size_t)nq + 2 * (size_t)np) * sizeof *x);
@@ -528,13 +632,13 @@ static hoc_status sweep_start(opt *o, double *objective, double *min_q, size_t *
       if (!o->valid[e]) {
         double smin, scale;
         sigma_stats(o, x, n, &smin, &scale);
-        double eps = (getenv("HOC_EPS") ? atof(getenv("HOC_EPS")) : 1e-3) * scale;
+        double eps = 1e-2 * scale;
         o->delta[e] = smin < eps ? sqrt(eps * (eps - smin)) : 0;
         if (!(o->delta[e] > 0)) o->delta[e] = eps;
       }
-      hoc_element_residuals(o->t, o->measure, x, n, o->delta[e], r, NULL);
       double f = 0;
-      for (int q = 0; q < nq; ++q) f += r[q] * r[q];
+      int nr = elem_residuals(o, e, x, n, r, NULL, NULL);
+      for (int q = 0; q < nr; ++q) f += r[q] * r[q];
       fe[e] = f;
     }
     free(x);
@@ -542,7 +646,6 @@ static hoc_status sweep_start(opt *o, double *objective, double *min_q, size_t *
   /* the tangled region: tangled elements and those sharing a node with one
    * take the largest regularisation around them (Escobar et al. regularise
    * the whole mesh with one delta; this keeps the rest of it exact) */
-  memset(o->region, 0, ne);
   for (size_t e = 0; e < ne && !failed; ++e) {
     if (o->valid[e]) continue;
     for (int i = 0; i < np; ++i) {
@@ -556,7 +659,7 @@ static hoc_status sweep_start(opt *o, double *objective, double *min_q, size_t *
   }
 #pragma omp parallel
   {
-    double *x = malloc((6 * (size_t)np + (size_t)nq) * sizeof *x);
+    double *x = malloc((7 * (size_t)np + (size_t)nq) * sizeof *x);
     if (!x) {
 #pragma omp atomic write
       failed = 1;
@@ -564,11 +667,11 @@ static hoc_status sweep_start(opt *o, double *objective, double *min_q, size_t *
     double *n = x ? x + 3 * np : NULL, *r = x ? x + 6 * np : NULL;
 #pragma omp for schedule(static)
     for (size_t e = 0; e < ne; ++e) {
-      if (!x || !o->region[e] || !o->valid[e]) continue;
+      if (!x || !o->region[e]) continue;
       gather(o, e, x, n);
-      hoc_element_residuals(o->t, o->measure, x, n, o->delta[e], r, NULL);
       double f = 0;
-      for (int q = 0; q < nq; ++q) f += r[q] * r[q];
+      int nr = elem_residuals(o, e, x, n, r, NULL, NULL);
+      for (int q = 0; q < nr; ++q) f += r[q] * r[q];
       fe[e] = f;
     }
     free(x);
@@ -593,74 +696,6 @@ static hoc_status sweep_start(opt *o, double *objective, double *min_q, size_t *
   return HOC_OK;
 }
 
-/* Local objective of node k at the current state: f, gradient g and
- * Gauss-Newton matrix H (packed h00 h01 h11) in its parameters. */
-static double carry_weight(const opt *o, size_t k, size_t node) {
-  for (size_t j = o->carry_start[k]; j < o->carry_start[k + 1]; ++j)
-    if (o->carry_node[j] == node) return o->carry_w[j];
-  return 0;
-}
-
-/* Residual derivatives of element e with respect to node k's parameters
- * when k moves with its carried nodes: Jz[q][2]. */
-static void carried_jacobian(const opt *o, size_t k, size_t e, scratch *s, double *Jz) {
-  const hoc_mesh *m = o->m;
-  int np = o->np, nq = o->nq;
-  const size_t *cn = m->conn + e * (size_t)np;
-  hoc_element_residuals(o->t, o->measure, s->x, s->n, o->delta[e], s->r, s->J);
-  for (int q = 0; q < nq; ++q) Jz[2 * q] = Jz[2 * q + 1] = 0;
-  for (int i = 0; i < np; ++i) {
-    double w = cn[i] == k ? 1.0 : carry_weight(o, k, cn[i]);
-    if (w == 0) continue;
-    const double *dz = o->dz + 6 * cn[i];
-    for (int q = 0; q < nq; ++q) {
-      const double *j = s->J + 3 * ((size_t)q * np + (size_t)i);
-      Jz[2 * q] += w * (j[0] * dz[0] + j[1] * dz[1] + j[2] * dz[2]);
-      Jz[2 * q + 1] += w * (j[0] * dz[3] + j[1] * dz[4] + j[2] * dz[5]);
-    }
-  }
-}
-
-static void local_model(const opt *o, size_t k, scratch *s, double *f, double g[2], double H[3]) {
-  int nd = o->ndof[k], nq = o->nq;
-  const double *dz = o->dz + 6 * k;
-  int carried = o->carry_start[k + 1] > o->carry_start[k];
-  *f = 0;
-  g[0] = g[1] = H[0] = H[1] = H[2] = 0;
-  for (size_t a = o->ne_start[k]; a < o->ne_start[k + 1]; ++a) {
-    size_t e = o->ne_elem[a];
-    int kk = o->ne_local[a];
-    gather(o, e, s->x, s->n);
-    if (carried) {
-      double *Jz = s->J + 3 * (size_t)nq * (size_t)o->np; /* after the full Jacobian */
-      carried_jacobian(o, k, e, s, Jz);
-      for (int q = 0; q < nq; ++q) {
-        double r = s->r[q], z0 = Jz[2 * q], z1 = Jz[2 * q + 1];
-        *f += r * r;
-        g[0] += 2 * r * z0;
-        g[1] += 2 * r * z1;
-        H[0] += 2 * z0 * z0;
-        H[1] += 2 * z0 * z1;
-        H[2] += 2 * z1 * z1;
-      }
-      continue;
-    }
-    hoc_element_residuals_node(o->t, o->measure, s->x, s->n, o->delta[e], kk, s->r, s->J);
-    for (int q = 0; q < nq; ++q) {
-      const double *j = s->J + 3 * q;
-      double r = s->r[q];
-      double z0 = j[0] * dz[0] + j[1] * dz[1] + j[2] * dz[2];
-      double z1 = nd > 1 ? j[0] * dz[3] + j[1] * dz[4] + j[2] * dz[5] : 0;
-      *f += r * r;
-      g[0] += 2 * r * z0;
-      g[1] += 2 * r * z1;
-      H[0] += 2 * z0 * z0;
-      H[1] += 2 * z0 * z1;
-      H[2] += 2 * z1 * z1;
-    }
-  }
-}
-
 /* Parameters of node k's slot s for the trial: (u,v) of the slot, unwrapped
  * near the element's current value. */
 static void trial_elem_uv(const opt *o, size_t k, size_t e, int kk, double *uv) {
@@ -676,70 +711,6 @@ static void trial_elem_uv(const opt *o, size_t k, size_t e, int kk, double *uv) 
   uv[0] = o->tslot_uv[2 * s];
   uv[1] = o->tslot_uv[2 * s + 1];
   hoc_cad_face_unwrap_near(&o->model->faces[m->elem_face[e]], cur, uv);
-}
-
-/* Curve parameters of line l's nodes in order along the line, unwrapped
- * from its first end; node k at tk. Returns 1 if strictly monotone in the
- * line's direction. */
-static int line_monotone(const opt *o, size_t l, size_t k, double tk) {
-  const hoc_mesh *m = o->m;
-  int p = m->order;
-  const size_t *ln = m->line_conn + l * (size_t)(p + 1);
-  const hoc_cad_curve *c = &o->model->curves[m->line_curve[l]];
-  double ta = m->line_t[2 * l], tb = m->line_t[2 * l + 1], dir = tb > ta ? 1.0 : -1.0;
-  double prev = NAN;
-  for (int j = 0; j <= p; ++j) {
-    int idx = j == 0 ? 0 : j == p ? 1 : j + 1;
-    size_t i = ln[idx];
-    double t;
-    if (i == k) t = tk;
-    else if (m->dim[i] == HOC_ON_CURVE) t = m->param[2 * i];
-    else t = j == 0 ? ta : tb;
-    if (i != k && m->dim[i] != HOC_ON_CURVE) {
-      /* a vertex end: its parameter is the line's */
-    } else if (c->period > 0) {
-      double guess = ta + (tb - ta) * j / p;
-      t -= c->period * floor((t - guess) / c->period + 0.5);
-    }
-    if (j > 0 && !(dir * (t - prev) > 0)) return 0;
-    prev = t;
-  }
-  return 1;
-}
-
-/* Local objective at the trial; 0 if the trial breaks a rule. */
-static void set_moving(opt *o, size_t k, unsigned char v) {
-  o->moving[k] = v;
-  for (size_t j = o->carry_start[k]; j < o->carry_start[k + 1]; ++j) o->moving[o->carry_node[j]] = v;
-}
-
-/* Local objective at the trial of node k (and the nodes it carries); 0 if
- * the trial breaks a rule. */
-static int local_trial_flagged(const opt *o, size_t k, scratch *s, double *f) {
-  const hoc_mesh *m = o->m;
-  int nq = o->nq;
-  *f = 0;
-  if (m->dim[k] == HOC_ON_CURVE)
-    for (size_t a = o->nl_start[k]; a < o->nl_start[k + 1]; ++a)
-      if (!line_monotone(o, o->nl_line[a], k, o->tpar[2 * k])) return 0;
-  for (size_t a = o->ne_start[k]; a < o->ne_start[k + 1]; ++a) {
-    size_t e = o->ne_elem[a];
-    gather(o, e, s->x, s->n);
-    if (o->pvalid[e] && !param_valid(o, e, s->uv)) return 0;
-    double smin = hoc_element_residuals(o->t, o->measure, s->x, s->n, o->delta[e], s->r, NULL);
-    if (o->valid[e] && !o->region[e] &&
-        (!(smin > 0) || hoc_element_nodes_tangled(o->t, s->x, s->n)))
-      return 0;
-    for (int q = 0; q < nq; ++q) *f += s->r[q] * s->r[q];
-  }
-  return isfinite(*f);
-}
-
-static int local_trial(opt *o, size_t k, scratch *s, double *f) {
-  set_moving(o, k, 1);
-  int ok = local_trial_flagged(o, k, s, f);
-  set_moving(o, k, 0);
-  return ok;
 }
 
 /* CAD evaluation of the trial parameters of the nodes in list[0..n). */
@@ -829,177 +800,322 @@ static void commit(opt *o, size_t k) {
 
 /* Sorting the trial list by (dim, entity) with a global context: qsort has
  * none in C11, so a small insertion-friendly merge sort instead. */
-static void sort_by_entity(const hoc_mesh *m, size_t *list, size_t n, size_t *tmp) {
-  for (size_t w = 1; w < n; w *= 2) {
-    for (size_t lo = 0; lo < n; lo += 2 * w) {
-      size_t mid = lo + w < n ? lo + w : n, hi = lo + 2 * w < n ? lo + 2 * w : n;
-      size_t a = lo, b = mid, out = lo;
-      while (a < mid || b < hi) {
-        int take_a = b >= hi;
-        if (!take_a && a < mid) {
-          long ka = (long)m->dim[list[a]] * 1000000000L + m->entity[list[a]];
-          long kb = (long)m->dim[list[b]] * 1000000000L + m->entity[list[b]];
-          take_a = ka <= kb;
-        }
-        tmp[out++] = take_a ? list[a++] : list[b++];
-      }
-    }
-    memcpy(list, tmp, n * sizeof *list);
-  }
-}
+/* Blocks ------------------------------------------------------------------- */
 
-/* Node k touches an element that is (or was at the sweep's start) tangled. */
-static int near_tangled(const opt *o, size_t k) {
-  for (size_t a = o->ne_start[k]; a < o->ne_start[k + 1]; ++a)
-    if (o->region[o->ne_elem[a]] || !o->valid[o->ne_elem[a]]) return 1;
+static double carry_weight(const opt *o, size_t b, size_t node) {
+  for (size_t j = o->carry_start[b]; j < o->carry_start[b + 1]; ++j)
+    if (o->carry_node[j] == node) return o->carry_w[j];
   return 0;
 }
 
-/* One colour: a Gauss-Newton step per active node, then a common
- * backtracking line search. Returns the number of nodes moved. */
+static void set_moving(opt *o, size_t b, unsigned char v) {
+  for (size_t a = o->bn_start[b]; a < o->bn_start[b + 1]; ++a) o->moving[o->bn_node[a]] = v;
+  for (size_t j = o->carry_start[b]; j < o->carry_start[b + 1]; ++j) o->moving[o->carry_node[j]] = v;
+}
+
+/* Local objective of block b at the current state: f, gradient g[nd] and
+ * Gauss-Newton matrix H[nd][nd] in its unknowns. */
+static void block_model(const opt *o, size_t b, scratch *s, double *f, double *g, double *H) {
+  const hoc_mesh *m = o->m;
+  int np = o->np, nd = (int)(o->bd_start[b + 1] - o->bd_start[b]);
+  int carries = o->carry_start[b + 1] > o->carry_start[b];
+  *f = 0;
+  memset(g, 0, (size_t)nd * sizeof *g);
+  memset(H, 0, (size_t)nd * (size_t)nd * sizeof *H);
+  for (size_t a = o->be_start[b]; a < o->be_start[b + 1]; ++a) {
+    size_t e = o->be_elem[a];
+    const size_t *cn = m->conn + e * (size_t)np;
+    gather(o, e, s->x, s->n);
+    int nr = elem_residuals(o, e, s->x, s->n, s->r, s->J, NULL);
+    double *Jz = s->Jz; /* [nr][nd] */
+    memset(Jz, 0, (size_t)nr * (size_t)nd * sizeof *Jz);
+    for (int i = 0; i < np; ++i) {
+      size_t node = cn[i];
+      int off, nd_i;
+      double w = 1;
+      if (o->node_block[node] == b) {
+        off = o->node_off[node];
+        nd_i = o->ndof[node];
+      } else if (carries && (w = carry_weight(o, b, node)) > 0) {
+        off = 0;
+        nd_i = 2;
+      } else {
+        continue;
+      }
+      const double *dz = o->dz + 6 * node;
+      for (int q = 0; q < nr; ++q) {
+        const double *j = s->J + 3 * ((size_t)q * np + (size_t)i);
+        Jz[q * nd + off] += w * (j[0] * dz[0] + j[1] * dz[1] + j[2] * dz[2]);
+        if (nd_i == 2) Jz[q * nd + off + 1] += w * (j[0] * dz[3] + j[1] * dz[4] + j[2] * dz[5]);
+      }
+    }
+    for (int q = 0; q < nr; ++q) {
+      double r = s->r[q];
+      const double *jz = Jz + q * nd;
+      *f += r * r;
+      for (int c = 0; c < nd; ++c) {
+        g[c] += 2 * r * jz[c];
+        for (int d = 0; d <= c; ++d) H[c * nd + d] += 2 * jz[c] * jz[d];
+      }
+    }
+  }
+  for (int c = 0; c < nd; ++c)
+    for (int d = c + 1; d < nd; ++d) H[c * nd + d] = H[d * nd + c];
+}
+
+/* Solve (H + mu diag(H)) x = -g by Cholesky, raising mu until it works.
+ * L: [nd][nd] scratch. Returns 0 if no step could be found. */
+static int damped_solve(int nd, const double *H, const double *g, double *L, double *x) {
+  double dmax = 0;
+  for (int c = 0; c < nd; ++c) dmax = fmax(dmax, H[c * nd + c]);
+  if (!(dmax > 0)) return 0;
+  for (double mu = 1e-10; mu < 1e6; mu *= 100) {
+    int ok = 1;
+    for (int c = 0; c < nd && ok; ++c)
+      for (int d = 0; d <= c; ++d) {
+        double v = H[c * nd + d];
+        if (c == d) v += mu * fmax(H[c * nd + c], 1e-12 * dmax);
+        for (int k = 0; k < d; ++k) v -= L[c * nd + k] * L[d * nd + k];
+        if (c == d) {
+          if (!(v > 0)) {
+            ok = 0;
+            break;
+          }
+          L[c * nd + c] = sqrt(v);
+        } else {
+          L[c * nd + d] = v / L[d * nd + d];
+        }
+      }
+    if (!ok) continue;
+    for (int c = 0; c < nd; ++c) { /* L y = -g */
+      double v = -g[c];
+      for (int k = 0; k < c; ++k) v -= L[c * nd + k] * x[k];
+      x[c] = v / L[c * nd + c];
+    }
+    for (int c = nd - 1; c >= 0; --c) { /* L^T x = y */
+      double v = x[c];
+      for (int k = c + 1; k < nd; ++k) v -= L[k * nd + c] * x[k];
+      x[c] = v / L[c * nd + c];
+    }
+    return 1;
+  }
+  return 0;
+}
+
+/* Curve parameters of line l's nodes in order along the line (trial values
+ * for moving nodes), unwrapped from its first end: 1 if strictly monotone in
+ * the line's direction. */
+static int line_monotone(const opt *o, size_t l) {
+  const hoc_mesh *m = o->m;
+  int p = m->order;
+  const size_t *ln = m->line_conn + l * (size_t)(p + 1);
+  const hoc_cad_curve *c = &o->model->curves[m->line_curve[l]];
+  double ta = m->line_t[2 * l], tb = m->line_t[2 * l + 1], dir = tb > ta ? 1.0 : -1.0;
+  double prev = NAN;
+  for (int j = 0; j <= p; ++j) {
+    int idx = j == 0 ? 0 : j == p ? 1 : j + 1;
+    size_t i = ln[idx];
+    double t;
+    if (m->dim[i] != HOC_ON_CURVE) {
+      t = j == 0 ? ta : tb; /* a vertex end: the line's own parameter */
+    } else {
+      t = o->moving[i] ? o->tpar[2 * i] : m->param[2 * i];
+      if (c->period > 0) {
+        double guess = ta + (tb - ta) * j / p;
+        t -= c->period * floor((t - guess) / c->period + 0.5);
+      }
+    }
+    if (j > 0 && !(dir * (t - prev) > 0)) return 0;
+    prev = t;
+  }
+  return 1;
+}
+
+/* Local objective of block b at its trial (nodes flagged moving); 0 if the
+ * trial breaks a rule. */
+static int block_trial_flagged(const opt *o, size_t b, scratch *s, double *f) {
+  const hoc_mesh *m = o->m;
+  *f = 0;
+  for (size_t a = o->bn_start[b]; a < o->bn_start[b + 1]; ++a) {
+    size_t k = o->bn_node[a];
+    if (m->dim[k] != HOC_ON_CURVE) continue;
+    for (size_t c = o->nl_start[k]; c < o->nl_start[k + 1]; ++c)
+      if (!line_monotone(o, o->nl_line[c])) return 0;
+  }
+  for (size_t a = o->be_start[b]; a < o->be_start[b + 1]; ++a) {
+    size_t e = o->be_elem[a];
+    gather(o, e, s->x, s->n);
+    if (o->pvalid[e] && !param_valid(o, e, s->uv)) return 0;
+    double smin;
+    int nr = elem_residuals(o, e, s->x, s->n, s->r, NULL, &smin);
+    if (o->valid[e] && (!(smin > 0) || hoc_element_nodes_tangled(o->t, s->x, s->n))) return 0;
+    for (int q = 0; q < nr; ++q) *f += s->r[q] * s->r[q];
+  }
+  return isfinite(*f);
+}
+
+static int block_trial(opt *o, size_t b, scratch *s, double *f) {
+  set_moving(o, b, 1);
+  int ok = block_trial_flagged(o, b, s, f);
+  set_moving(o, b, 0);
+  return ok;
+}
+
+/* Trial parameters of block b at step length alpha[b]: the block's nodes
+ * and the nodes it carries. Returns 0 if one leaves a non-closed range. */
+static int set_trial_params(opt *o, size_t b) {
+  const hoc_mesh *m = o->m;
+  const double *st = o->step + o->bd_start[b];
+  double al = o->alpha[b];
+  int inside = 1;
+  for (size_t a = o->bn_start[b]; a < o->bn_start[b + 1]; ++a) {
+    size_t k = o->bn_node[a];
+    int off = o->node_off[k];
+    if (m->dim[k] == HOC_ON_FACE) {
+      const hoc_cad_face *f = &o->model->faces[m->entity[k]];
+      for (int d = 0; d < 2; ++d) {
+        double v = m->param[2 * k + d] + al * st[off + d];
+        o->tpar[2 * k + d] = v;
+        if (!(f->period[d] > 0) && (v < f->lo[d] || v > f->hi[d])) inside = 0;
+      }
+    } else {
+      const hoc_cad_curve *c = &o->model->curves[m->entity[k]];
+      double v = m->param[2 * k] + al * st[off];
+      o->tpar[2 * k] = v;
+      o->tpar[2 * k + 1] = 0;
+      if (!(c->period > 0) && (v < c->lo || v > c->hi)) inside = 0;
+    }
+  }
+  for (size_t j = o->carry_start[b]; j < o->carry_start[b + 1]; ++j) {
+    size_t c = o->carry_node[j];
+    const hoc_cad_face *f = &o->model->faces[m->entity[c]];
+    for (int d = 0; d < 2; ++d) {
+      double v = m->param[2 * c + d] + al * o->carry_w[j] * st[d];
+      o->tpar[2 * c + d] = v;
+      if (!(f->period[d] > 0) && (v < f->lo[d] || v > f->hi[d])) inside = 0;
+    }
+  }
+  return inside;
+}
+
+/* Block b touches a tangled element or one next to it. */
+static int near_tangled(const opt *o, size_t b) {
+  for (size_t a = o->be_start[b]; a < o->be_start[b + 1]; ++a)
+    if (o->region[o->be_elem[a]] || !o->valid[o->be_elem[a]]) return 1;
+  return 0;
+}
+
+static int block_active(const opt *o, size_t b) {
+  for (size_t a = o->bn_start[b]; a < o->bn_start[b + 1]; ++a)
+    if (o->active[o->bn_node[a]]) return 1;
+  return 0;
+}
+
+/* One colour: a Gauss-Newton step per active block, then a common
+ * backtracking line search. *moved counts the nodes moved. */
 static hoc_status do_color(opt *o, int color, scratch *scr, int nthreads, size_t *moved) {
   hoc_mesh *m = o->m;
   size_t first = o->color_start[color], last = o->color_start[color + 1];
   size_t n = 0;
   for (size_t a = first; a < last; ++a) {
-    size_t k = o->color_node[a];
-    if (o->active[k]) o->list[n++] = k;
+    size_t b = o->color_block[a];
+    if (block_active(o, b)) o->list[n++] = b;
   }
   *moved = 0;
   if (!n) return HOC_OK;
   size_t *list = o->list;
-#pragma omp parallel for schedule(dynamic, 16) num_threads(nthreads)
+#pragma omp parallel for schedule(dynamic, 8) num_threads(nthreads)
   for (size_t a = 0; a < n; ++a) {
-    size_t k = list[a];
+    size_t b = list[a];
     scratch *s = &scr[omp_get_thread_num()];
-    o->active[k] = 0;
-    double f, g[2], H[3];
-    local_model(o, k, s, &f, g, H);
-    o->f0[k] = f;
-    o->state[k] = 0;
-    double step[2] = {0, 0};
-    if (o->ndof[k] == 2) {
-      double tr = H[0] + H[2], mu = 1e-10 * tr + 1e-300;
-      double a00 = H[0] + mu, a11 = H[2] + mu, det = a00 * a11 - H[1] * H[1];
-      if (det > 0) {
-        step[0] = -(a11 * g[0] - H[1] * g[1]) / det;
-        step[1] = -(a00 * g[1] - H[1] * g[0]) / det;
-      }
-    } else if (H[0] > 0) {
-      step[0] = -g[0] / (H[0] * (1 + 1e-10));
+    for (size_t c = o->bn_start[b]; c < o->bn_start[b + 1]; ++c) o->active[o->bn_node[c]] = 0;
+    int nd = (int)(o->bd_start[b + 1] - o->bd_start[b]);
+    double f;
+    block_model(o, b, s, &f, s->g, s->H);
+    o->f0[b] = f;
+    o->state[b] = 0;
+    double *st = o->step + o->bd_start[b];
+    if (!damped_solve(nd, s->H, s->g, s->L, st)) continue;
+    double slope = 0;
+    for (int c = 0; c < nd; ++c) slope += s->g[c] * st[c];
+    /* limit every node's displacement to a quarter of its local size */
+    double alpha = 1, len_max = 0;
+    for (size_t c = o->bn_start[b]; c < o->bn_start[b + 1]; ++c) {
+      size_t k = o->bn_node[c];
+      const double *dz = o->dz + 6 * k, *sk = st + o->node_off[k];
+      double dx[3];
+      for (int d = 0; d < 3; ++d) dx[d] = dz[d] * sk[0] + (o->ndof[k] == 2 ? dz[3 + d] * sk[1] : 0);
+      double len = sqrt(dx[0] * dx[0] + dx[1] * dx[1] + dx[2] * dx[2]);
+      len_max = fmax(len_max, len / o->hsize[k]);
     }
-    double slope = g[0] * step[0] + g[1] * step[1];
-    /* limit the displacement to a fraction of the local element size */
-    const double *dz = o->dz + 6 * k;
-    double dx[3];
-    for (int c = 0; c < 3; ++c) dx[c] = dz[c] * step[0] + dz[3 + c] * step[1];
-    double len = sqrt(dx[0] * dx[0] + dx[1] * dx[1] + dx[2] * dx[2]);
-    double alpha = 1;
-    if (len > 0.25 * o->hsize[k]) alpha = 0.25 * o->hsize[k] / len;
-    if (!(slope < 0) || !(len * alpha > 1e-12 * o->hsize[k]) || !isfinite(slope)) continue;
-    o->step[2 * k] = step[0];
-    o->step[2 * k + 1] = step[1];
-    o->slope[k] = slope;
-    o->alpha[k] = alpha;
-    o->state[k] = 1;
+    if (len_max > 0.25) alpha = 0.25 / len_max;
+    if (!(slope < 0) || !isfinite(slope) || !(len_max * alpha > 1e-12)) continue;
+    o->slope[b] = slope;
+    o->alpha[b] = alpha;
+    o->state[b] = 1;
   }
-  /* compact to the nodes trying a step; keep them sorted by entity for the
-   * batched CAD calls */
   size_t nt = 0;
   for (size_t a = 0; a < n; ++a)
     if (o->state[list[a]] == 1) list[nt++] = list[a];
   size_t n_eval = 0;
-  for (size_t a = 0; a < nt; ++a) n_eval += 1 + o->carry_start[list[a] + 1] - o->carry_start[list[a]];
-  size_t *tmp = hoc_calloc(nt + 1, sizeof *tmp), *elist = hoc_calloc(n_eval + 1, sizeof *elist);
-  if (!tmp || !elist) {
-    free(tmp);
-    free(elist);
-    return HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
+  for (size_t a = 0; a < nt; ++a) {
+    size_t b = list[a];
+    n_eval += o->bn_start[b + 1] - o->bn_start[b] + o->carry_start[b + 1] - o->carry_start[b];
   }
-  sort_by_entity(m, list, nt, tmp);
+  size_t *elist = hoc_calloc(n_eval + 1, sizeof *elist);
+  HOC_CHECK(elist, HOC_ERR_MEMORY, "out of memory");
   hoc_status status = HOC_OK;
-  for (int attempt = 0; attempt < 10 && nt; ++attempt) {
-    /* trial parameters; out of a non-closed range: shorten the step first */
-    for (size_t a = 0; a < nt; ++a) {
-      size_t k = list[a];
-      for (int tries = 0; tries < 40; ++tries) {
-        double u = m->param[2 * k] + o->alpha[k] * o->step[2 * k];
-        double v = m->param[2 * k + 1] + o->alpha[k] * o->step[2 * k + 1];
-        int inside = 1;
-        if (m->dim[k] == HOC_ON_FACE) {
-          const hoc_cad_face *f = &o->model->faces[m->entity[k]];
-          if (!(f->period[0] > 0) && (u < f->lo[0] || u > f->hi[0])) inside = 0;
-          if (!(f->period[1] > 0) && (v < f->lo[1] || v > f->hi[1])) inside = 0;
-        } else {
-          const hoc_cad_curve *c = &o->model->curves[m->entity[k]];
-          if (!(c->period > 0) && (u < c->lo || u > c->hi)) inside = 0;
-          v = 0;
-        }
-        o->tpar[2 * k] = u;
-        o->tpar[2 * k + 1] = v;
-        const hoc_cad_face *f = m->dim[k] == HOC_ON_FACE ? &o->model->faces[m->entity[k]] : NULL;
-        for (size_t j = o->carry_start[k]; j < o->carry_start[k + 1] && inside; ++j) {
-          size_t c = o->carry_node[j];
-          double w = o->alpha[k] * o->carry_w[j];
-          o->tpar[2 * c] = m->param[2 * c] + w * o->step[2 * k];
-          o->tpar[2 * c + 1] = m->param[2 * c + 1] + w * o->step[2 * k + 1];
-          for (int d = 0; d < 2; ++d)
-            if (!(f->period[d] > 0) && (o->tpar[2 * c + d] < f->lo[d] || o->tpar[2 * c + d] > f->hi[d]))
-              inside = 0;
-        }
-        if (inside) break;
-        o->alpha[k] *= 0.5;
-      }
-    }
-    /* the nodes to evaluate: the trying ones and those they carry */
+  for (int attempt = 0; attempt < 12 && nt; ++attempt) {
     size_t ne_list = 0;
     for (size_t a = 0; a < nt; ++a) {
-      size_t k = list[a];
-      elist[ne_list++] = k;
-      for (size_t j = o->carry_start[k]; j < o->carry_start[k + 1]; ++j) elist[ne_list++] = o->carry_node[j];
+      size_t b = list[a];
+      for (int tries = 0; tries < 40 && !set_trial_params(o, b); ++tries) o->alpha[b] *= 0.5;
+      for (size_t c = o->bn_start[b]; c < o->bn_start[b + 1]; ++c) elist[ne_list++] = o->bn_node[c];
+      for (size_t j = o->carry_start[b]; j < o->carry_start[b + 1]; ++j) elist[ne_list++] = o->carry_node[j];
     }
     HOC_TRY_GOTO(eval_trials(o, elist, ne_list), done);
-#pragma omp parallel for schedule(dynamic, 16) num_threads(nthreads)
+#pragma omp parallel for schedule(dynamic, 8) num_threads(nthreads)
     for (size_t a = 0; a < nt; ++a) {
-      size_t k = list[a];
+      size_t b = list[a];
       scratch *s = &scr[omp_get_thread_num()];
       double f;
-      int ok = local_trial(o, k, s, &f);
-      if (ok && f <= o->f0[k] + 1e-4 * o->alpha[k] * o->slope[k]) {
-        commit(o, k);
-        for (size_t j = o->carry_start[k]; j < o->carry_start[k + 1]; ++j) commit(o, o->carry_node[j]);
-        o->fnew[k] = f;
-        o->state[k] = 2;
+      int ok = block_trial(o, b, s, &f);
+      if (ok && f <= o->f0[b] + 1e-4 * o->alpha[b] * o->slope[b]) {
+        for (size_t c = o->bn_start[b]; c < o->bn_start[b + 1]; ++c) commit(o, o->bn_node[c]);
+        for (size_t j = o->carry_start[b]; j < o->carry_start[b + 1]; ++j) commit(o, o->carry_node[j]);
+        o->fnew[b] = f;
+        o->state[b] = 2;
       } else {
-        o->alpha[k] *= 0.5;
+        o->alpha[b] *= 0.5;
       }
     }
     size_t keep = 0;
     for (size_t a = 0; a < nt; ++a) {
-      size_t k = list[a];
-      if (o->state[k] == 2) {
-        ++*moved;
-        o->state[k] = 0;
-        if (o->f0[k] - o->fnew[k] < o->min_gain && !near_tangled(o, k)) continue;
-        /* wake the neighbours (and the node itself) for the next sweep */
-        for (size_t b = o->ne_start[k]; b < o->ne_start[k + 1]; ++b) {
-          const size_t *cn = m->conn + o->ne_elem[b] * (size_t)o->np;
-          for (int i = 0; i < o->np; ++i) o->active[cn[i]] = 1;
-        }
-      } else {
-        list[keep++] = k; /* order by entity is kept */
+      size_t b = list[a];
+      if (o->state[b] != 2) {
+        list[keep++] = b;
+        continue;
+      }
+      o->state[b] = 0;
+      size_t nodes = o->bn_start[b + 1] - o->bn_start[b];
+      *moved += nodes;
+      if (o->f0[b] - o->fnew[b] < o->min_gain * (double)nodes && !near_tangled(o, b)) continue;
+      /* wake every node of the elements it touches (itself included) */
+      for (size_t c = o->be_start[b]; c < o->be_start[b + 1]; ++c) {
+        const size_t *cn = m->conn + o->be_elem[c] * (size_t)o->np;
+        for (int i = 0; i < o->np; ++i) o->active[cn[i]] = 1;
       }
     }
     nt = keep;
   }
-  for (size_t a = 0; a < nt; ++a) o->state[list[a]] = 0; /* gave up: stays inactive */
+  for (size_t a = 0; a < nt; ++a) o->state[list[a]] = 0; /* gave up: asleep */
   /* validity may have been gained */
-#pragma omp parallel for schedule(dynamic, 16) num_threads(nthreads)
+#pragma omp parallel for schedule(dynamic, 8) num_threads(nthreads)
   for (size_t a = first; a < last; ++a) {
-    size_t k = o->color_node[a];
+    size_t b = o->color_block[a];
     scratch *s = &scr[omp_get_thread_num()];
-    for (size_t b = o->ne_start[k]; b < o->ne_start[k + 1]; ++b) {
-      size_t e = o->ne_elem[b];
+    for (size_t c = o->be_start[b]; c < o->be_start[b + 1]; ++c) {
+      size_t e = o->be_elem[c];
       if (!o->valid[e]) {
         gather(o, e, s->x, s->n);
         o->valid[e] = (unsigned char)!hoc_element_tangled(o->t, s->x, s->n);
@@ -1008,7 +1124,6 @@ static hoc_status do_color(opt *o, int color, scratch *scr, int nthreads, size_t
     }
   }
 done:
-  free(tmp);
   free(elist);
   return status;
 }
@@ -1016,26 +1131,24 @@ done:
 static hoc_status scratch_alloc(const opt *o, int nthreads, scratch **out) {
   scratch *s = hoc_calloc((size_t)nthreads, sizeof *s);
   HOC_CHECK(s, HOC_ERR_MEMORY, "out of memory");
-  size_t np = (size_t)o->np, nq = (size_t)o->nq;
+  size_t np = (size_t)o->np, nq = (size_t)o->nq, nd = (size_t)(o->max_nd ? o->max_nd : 1);
+  int failed = 0;
   for (int i = 0; i < nthreads; ++i) {
     s[i].x = hoc_calloc(3 * np, sizeof(double));
     s[i].n = hoc_calloc(3 * np, sizeof(double));
-    s[i].r = hoc_calloc(nq, sizeof(double));
-    s[i].J = hoc_calloc(3 * nq * np + 2 * nq, sizeof(double));
+    s[i].r = hoc_calloc(nq + np, sizeof(double));
+    s[i].J = hoc_calloc(3 * (nq + np) * np, sizeof(double));
     s[i].uv = hoc_calloc(2 * np, sizeof(double));
-    if (!s[i].x || !s[i].n || !s[i].r || !s[i].J || !s[i].uv) {
-      for (int j = 0; j <= i; ++j) {
-        free(s[j].x);
-        free(s[j].n);
-        free(s[j].r);
-        free(s[j].J);
-        free(s[j].uv);
-      }
-      free(s);
-      return HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
-    }
+    s[i].Jz = hoc_calloc((nq + np) * nd, sizeof(double));
+    s[i].H = hoc_calloc(nd * nd, sizeof(double));
+    s[i].g = hoc_calloc(nd, sizeof(double));
+    s[i].L = hoc_calloc(nd * nd, sizeof(double));
+    if (!s[i].x || !s[i].n || !s[i].r || !s[i].J || !s[i].uv || !s[i].Jz || !s[i].H || !s[i].g ||
+        !s[i].L)
+      failed = 1;
   }
   *out = s;
+  if (failed) return HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
   return HOC_OK;
 }
 
@@ -1047,6 +1160,10 @@ static void scratch_free(scratch *s, int nthreads) {
     free(s[i].r);
     free(s[i].J);
     free(s[i].uv);
+    free(s[i].Jz);
+    free(s[i].H);
+    free(s[i].g);
+    free(s[i].L);
   }
   free(s);
 }
@@ -1062,6 +1179,7 @@ hoc_status hoc_mesh_optimize(hoc_mesh *mesh, const hoc_optimize_options *options
   HOC_CHECK(o.measure == HOC_MEASURE_SHAPE || o.measure == HOC_MEASURE_ODDY, HOC_ERR_ARGUMENT,
             "unknown distortion measure %d", (int)o.measure);
   HOC_CHECK(o.max_iterations <= 1000000, HOC_ERR_ARGUMENT, "too many iterations requested");
+  HOC_CHECK(isfinite(o.tolerance), HOC_ERR_ARGUMENT, "tolerance must be a finite number");
   double t0 = now();
   opt ctx;
   scratch *scr = NULL;
@@ -1070,6 +1188,7 @@ hoc_status hoc_mesh_optimize(hoc_mesh *mesh, const hoc_optimize_options *options
   if (status == HOC_OK) status = eval_all(&ctx);
   if (status == HOC_OK) status = scratch_alloc(&ctx, nthreads, &scr);
   if (status != HOC_OK) {
+    scratch_free(scr, nthreads);
     opt_free(&ctx);
     return status;
   }
@@ -1085,15 +1204,15 @@ hoc_status hoc_mesh_optimize(hoc_mesh *mesh, const hoc_optimize_options *options
   res.tangled_initial = tangled;
   for (int it = 1; it <= o.max_iterations; ++it) {
     size_t moved = 0;
-    /* nodes of tangled elements never sleep */
+    /* nodes near tangled elements never sleep */
     for (size_t e = 0; e < mesh->n_elems; ++e)
-      if (ctx.delta[e] > 0)
+      if (ctx.region[e])
         for (int i = 0; i < ctx.np; ++i) {
           size_t node = mesh->conn[e * (size_t)ctx.np + (size_t)i];
           if (ctx.ndof[node]) ctx.active[node] = 1;
         }
-    /* moves worth a small fraction of the average node's share of f keep
-     * their neighbourhood active; the rest of the mesh settles */
+    /* a step worth less than a small share of the average node's part of f
+     * puts its block to sleep */
     ctx.min_gain = o.tolerance * f / (double)(res.free_nodes ? res.free_nodes : 1);
     for (int c = 0; c < ctx.n_colors; ++c) {
       size_t mc;
@@ -1109,7 +1228,6 @@ hoc_status hoc_mesh_optimize(hoc_mesh *mesh, const hoc_optimize_options *options
         goto done;
       }
     }
-    /* converged: no node can lower f by a worthwhile amount any more */
     size_t active = 0;
     for (size_t i = 0; i < mesh->n_nodes; ++i) active += ctx.active[i];
     if (!active || !moved) {
@@ -1129,32 +1247,32 @@ done:
 
 /* Gradient check -------------------------------------------------------- */
 
-
-
-/* Local objective of node k with its position at parameters z (positions
- * evaluated on the CAD; normals kept). */
-static hoc_status local_f_at(opt *o, size_t k, const double *z, scratch *s, double *f) {
-  hoc_mesh *m = o->m;
-  size_t list[1 + 4 * (HOC_MAX_ORDER + 1) * (HOC_MAX_ORDER + 2)], n = 0;
-  list[n++] = k;
-  o->tpar[2 * k] = z[0];
-  o->tpar[2 * k + 1] = m->dim[k] == HOC_ON_FACE ? z[1] : 0;
-  for (size_t j = o->carry_start[k]; j < o->carry_start[k + 1]; ++j) {
-    size_t c = o->carry_node[j];
-    for (int d = 0; d < 2; ++d)
-      o->tpar[2 * c + d] = m->param[2 * c + d] + o->carry_w[j] * (z[d] - m->param[2 * k + d]);
-    if (n < sizeof list / sizeof *list) list[n++] = c;
-  }
-  HOC_TRY(eval_trials(o, list, n));
-  set_moving(o, k, 1);
+/* Local objective of block b with unknown `dof` moved by h (the nodes it
+ * carries follow), positions and normals evaluated on the CAD. */
+static hoc_status block_f_at(opt *o, size_t b, int dof, double h, scratch *s, double *f) {
+  double *st = o->step + o->bd_start[b];
+  int nd = (int)(o->bd_start[b + 1] - o->bd_start[b]);
+  for (int c = 0; c < nd; ++c) st[c] = c == dof ? h : 0;
+  o->alpha[b] = 1;
+  set_trial_params(o, b);
+  size_t n = 0;
+  size_t nlist = o->bn_start[b + 1] - o->bn_start[b] + o->carry_start[b + 1] - o->carry_start[b];
+  size_t *list = hoc_calloc(nlist + 1, sizeof *list);
+  HOC_CHECK(list, HOC_ERR_MEMORY, "out of memory");
+  for (size_t c = o->bn_start[b]; c < o->bn_start[b + 1]; ++c) list[n++] = o->bn_node[c];
+  for (size_t j = o->carry_start[b]; j < o->carry_start[b + 1]; ++j) list[n++] = o->carry_node[j];
+  hoc_status st2 = eval_trials(o, list, n);
+  free(list);
+  HOC_TRY(st2);
+  set_moving(o, b, 1);
   *f = 0;
-  for (size_t a = o->ne_start[k]; a < o->ne_start[k + 1]; ++a) {
-    size_t e = o->ne_elem[a];
+  for (size_t a = o->be_start[b]; a < o->be_start[b + 1]; ++a) {
+    size_t e = o->be_elem[a];
     gather(o, e, s->x, s->n);
-    hoc_element_residuals(o->t, o->measure, s->x, s->n, o->delta[e], s->r, NULL);
-    for (int q = 0; q < o->nq; ++q) *f += s->r[q] * s->r[q];
+    int nr = elem_residuals(o, e, s->x, s->n, s->r, NULL, NULL);
+    for (int q = 0; q < nr; ++q) *f += s->r[q] * s->r[q];
   }
-  set_moving(o, k, 0);
+  set_moving(o, b, 0);
   return HOC_OK;
 }
 
@@ -1168,45 +1286,41 @@ hoc_status hoc_mesh_check_gradient(hoc_mesh *mesh, hoc_measure measure, int fix_
   if (status == HOC_OK) status = eval_all(&ctx);
   if (status == HOC_OK) status = scratch_alloc(&ctx, 1, &scr);
   if (status != HOC_OK) {
+    scratch_free(scr, 1);
     opt_free(&ctx);
     return status;
   }
   double f, qmin;
   size_t tangled;
   HOC_TRY_GOTO(sweep_start(&ctx, &f, &qmin, &tangled), done);
-  size_t n_free = 0;
-  for (size_t i = 0; i < mesh->n_nodes; ++i) n_free += ctx.ndof[i] > 0;
-  size_t stride = n_free > (size_t)samples ? n_free / (size_t)samples : 1;
+  size_t stride = ctx.n_blocks > (size_t)samples ? ctx.n_blocks / (size_t)samples : 1;
   double worst = 0, gmax = 0;
-  size_t seen = 0;
-  for (size_t k = 0; k < mesh->n_nodes; ++k) {
-    if (!ctx.ndof[k]) continue;
-    if (seen++ % stride) continue;
-    double fl, g[2], H[3];
-    local_model(&ctx, k, scr, &fl, g, H);
-    for (int d = 0; d < ctx.ndof[k]; ++d) {
-      /* step: a small fraction of the local size in parameter units */
-      const double *dz = ctx.dz + 6 * k + 3 * d;
+  for (size_t b = 0; b < ctx.n_blocks; b += stride) {
+    double fl;
+    block_model(&ctx, b, scr, &fl, scr->g, scr->H);
+    int nd = (int)(ctx.bd_start[b + 1] - ctx.bd_start[b]);
+    for (int d = 0; d < nd; ++d) {
+      /* the node owning this unknown sets the scale of the step */
+      size_t k = ctx.bn_node[ctx.bn_start[b]];
+      for (size_t c = ctx.bn_start[b]; c < ctx.bn_start[b + 1]; ++c)
+        if (ctx.node_off[ctx.bn_node[c]] <= d) k = ctx.bn_node[c];
+      int dd = d - ctx.node_off[k];
+      const double *dz = ctx.dz + 6 * k + 3 * dd;
       double speed = sqrt(dz[0] * dz[0] + dz[1] * dz[1] + dz[2] * dz[2]);
       if (!(speed > 0)) continue;
-      double h = 1e-5 * ctx.hsize[k] / speed;
-      double zp[2] = {mesh->param[2 * k], mesh->param[2 * k + 1]}, zm[2];
-      memcpy(zm, zp, sizeof zm);
-      zp[d] += h;
-      zm[d] -= h;
+      double h = 1e-5 * ctx.hsize[k] / speed, gd = scr->g[d];
       double fp, fm;
-      HOC_TRY_GOTO(local_f_at(&ctx, k, zp, scr, &fp), done);
-      HOC_TRY_GOTO(local_f_at(&ctx, k, zm, scr, &fm), done);
+      HOC_TRY_GOTO(block_f_at(&ctx, b, d, h, scr, &fp), done);
+      HOC_TRY_GOTO(block_f_at(&ctx, b, d, -h, scr, &fm), done);
       double fd = (fp - fm) / (2 * h);
       if (!isfinite(fd)) continue;
-      /* in parameter units: scaled by the node's speed to compare nodes */
-      worst = fmax(worst, fabs(fd - g[d]) / speed);
-      gmax = fmax(gmax, fabs(g[d]) / speed);
+      /* per unit length, to compare unknowns of different nodes */
+      worst = fmax(worst, fabs(fd - gd) / speed);
+      gmax = fmax(gmax, fabs(gd) / speed);
     }
   }
   /* a norm-wise relative error, as PETSc's -snes_test_jacobian reports */
-  worst = gmax > 0 ? worst / gmax : worst;
-  *max_rel_error = worst;
+  *max_rel_error = gmax > 0 ? worst / gmax : worst;
 done:
   scratch_free(scr, 1);
   opt_free(&ctx);

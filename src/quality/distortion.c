@@ -183,6 +183,29 @@ double hoc_element_residuals_node(const hoc_quality_tables *t, hoc_measure measu
   return smin;
 }
 
+double hoc_element_node_residuals(const hoc_quality_tables *t, hoc_measure measure,
+                                  const double *x, const double *n, double delta, double *r,
+                                  double *J) {
+  int np = t->np;
+  double smin = INFINITY, sw = sqrt(1.0 / np);
+  for (int j = 0; j < np; ++j) {
+    double a1[3], a2[3], sig, g1[3], g2[3];
+    const double *G = t->Gn + 2 * (size_t)j * np;
+    jacobian_at(np, x, G, a1, a2);
+    double e = hoc_distortion_point(measure, a1, a2, n + 3 * j, delta, &sig, J ? g1 : NULL,
+                                    J ? g2 : NULL);
+    double rel = sig / (dot(a1, a1) + dot(a2, a2));
+    if (!(rel >= smin)) smin = rel;
+    r[j] = sw * (e - 1);
+    if (J) {
+      double *Jj = J + 3 * (size_t)j * np;
+      for (int i = 0; i < np; ++i)
+        for (int k = 0; k < 3; ++k) Jj[3 * i + k] = sw * (g1[k] * G[2 * i] + g2[k] * G[2 * i + 1]);
+    }
+  }
+  return smin;
+}
+
 int hoc_element_tangled(const hoc_quality_tables *t, const double *x, const double *n) {
   int np = t->np;
   for (int q = 0; q < t->nq; ++q) {

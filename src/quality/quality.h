@@ -83,6 +83,16 @@ double hoc_element_residuals_node(const hoc_quality_tables *t, hoc_measure measu
                                   const double *x, const double *n, double delta, int node,
                                   double *r, double *Jk);
 
+/** Residuals at the element's nodes, r_j = sqrt(1/np) (eta(node j) - 1),
+ *  for untangling: Definition 2 also asks det > 0 at the nodes, which the
+ *  quadrature points alone do not see.
+ *  @param[out] r  [np]
+ *  @param[out] J  [np][np][3] d r_j / d x_i, or NULL
+ *  @return smallest sigma / |D phi|^2 over the nodes */
+double hoc_element_node_residuals(const hoc_quality_tables *t, hoc_measure measure,
+                                  const double *x, const double *n, double delta, double *r,
+                                  double *J);
+
 /** Tangled test of Definition 2 (delta = 0): 1 if sigma <= 0 at a
  *  quadrature point or a node. Same test as hoc_element_quality. */
 int hoc_element_tangled(const hoc_quality_tables *t, const double *x, const double *n);
