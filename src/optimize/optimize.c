@@ -10,11 +10,14 @@
  * Unknowns z: (u, v) of face-interior nodes, t of nodes on CAD curves.
  * Positions x(z) = phi(u, v) or c(t) are always CAD evaluations.
  *
- * Solver: nonlinear block Gauss-Seidel on natural blocks of the high-order
- * mesh: each vertex of the linear mesh (a face-interior vertex carries the
- * high-order nodes of its star along, displaced in (u,v) by their
- * barycentric weight, so the star moves as a whole), the nodes inside each
- * element edge, and the nodes inside each element. A block takes a damped
+ * Solver: nonlinear block Gauss-Seidel. Each sweep visits the natural
+ * blocks of the high-order mesh: each vertex of the linear mesh (a
+ * face-interior vertex carries the high-order nodes of its star along,
+ * displaced in (u,v) by their barycentric weight, so the star moves as a
+ * whole), the nodes inside each element edge, and the nodes inside each
+ * element; then every free node on its own (the two families reach
+ * different places: blocks untangle high orders, single nodes let curve
+ * vertices slide where a block's compromise stalls). A block takes a damped
  * Gauss-Newton step on the elements it touches (a small dense system),
  * followed by a backtracking line search that rejects any step that tangles
  * a valid element, folds an element in the parameter plane (so no node
@@ -49,6 +52,23 @@ void hoc_optimize_options_default(hoc_optimize_options *o) {
   o->tolerance = 0.1;
 }
 
+/* A family of blocks: each block a set of free nodes updated together. */
+typedef struct blockset {
+  size_t n_blocks;
+  size_t *bn_start, *bn_node; /* block -> its nodes */
+  size_t *be_start, *be_elem; /* block -> the elements it touches */
+  size_t *bd_start;     /* block -> first of its unknowns in step[] */
+  size_t *node_block;   /* [n_nodes] block of a free node (SIZE_MAX if fixed) */
+  int *node_off;        /* [n_nodes] offset of the node's unknowns in its block */
+  size_t *carry_start;  /* [n_blocks+1] nodes a vertex block carries ... */
+  size_t *carry_node;
+  double *carry_w;      /* ... and their weights */
+  int max_nd;           /* most unknowns in a block */
+  int n_colors;
+  size_t *color_start;  /* [n_colors+1] */
+  size_t *color_block;
+} blockset;
+
 typedef struct opt {
   hoc_mesh *m;
   const hoc_model *model;
@@ -63,20 +83,9 @@ typedef struct opt {
   size_t *ns_slot;
   size_t *nl_start;     /* [n_nodes+1] node -> lines */
   size_t *nl_line;
-  /* blocks */
-  size_t n_blocks;
-  size_t *bn_start, *bn_node; /* block -> its nodes */
-  size_t *be_start, *be_elem; /* block -> the elements it touches */
-  size_t *bd_start;     /* block -> first of its unknowns in step[] */
-  size_t *node_block;   /* [n_nodes] block of a free node (SIZE_MAX if fixed) */
-  int *node_off;        /* [n_nodes] offset of the node's unknowns in its block */
-  size_t *carry_start;  /* [n_blocks+1] nodes a vertex block carries ... */
-  size_t *carry_node;
-  double *carry_w;      /* ... and their weights */
-  int max_nd;           /* most unknowns in a block */
-  int n_colors;
-  size_t *color_start;  /* [n_colors+1] */
-  size_t *color_block;
+  blockset fam[2];      /* 0: vertices (with carried stars), edges, interiors; 1: single nodes */
+  blockset *B;          /* the family being swept */
+  int max_nd;           /* most unknowns in a block of either family */
   /* state */
   double *dz;           /* [n_nodes][6] dx/dz: (phi_u, phi_v) or (c', 0) */
   double *normal;       /* [n_slots][3] unit CAD normal at each slot, oriented */
@@ -108,13 +117,17 @@ typedef struct scratch {
 } scratch;
 
 static void opt_free(opt *o) {
+  for (int f = 0; f < 2; ++f) {
+    blockset *b = &o->fam[f];
+    void *q[] = {b->bn_start, b->bn_node, b->be_start,   b->be_elem,    b->bd_start,
+                 b->node_block, b->node_off, b->carry_start, b->carry_node, b->carry_w,
+                 b->color_start, b->color_block};
+    for (size_t i = 0; i < sizeof q / sizeof *q; ++i) free(q[i]);
+  }
   void *p[] = {o->ndof, o->ne_start, o->ne_elem, o->ne_local, o->ns_start, o->ns_slot,
-               o->nl_start, o->nl_line, o->bn_start, o->bn_node, o->be_start, o->be_elem,
-               o->bd_start, o->node_block, o->node_off, o->carry_start, o->carry_node,
-               o->carry_w, o->color_start, o->color_block, o->dz, o->normal, o->delta,
-               o->valid, o->pvalid, o->region, o->hsize, o->active, o->moving, o->step,
-               o->alpha, o->f0, o->fnew, o->slope, o->state, o->list, o->tpar, o->txyz,
-               o->tdz, o->tslot_uv, o->tnormal};
+               o->nl_start, o->nl_line, o->dz, o->normal, o->delta, o->valid, o->pvalid,
+               o->region, o->hsize, o->active, o->moving, o->step, o->alpha, o->f0, o->fnew,
+               o->slope, o->state, o->list, o->tpar, o->txyz, o->tdz, o->tslot_uv, o->tnormal};
   for (size_t i = 0; i < sizeof p / sizeof *p; ++i) free(p[i]);
 }
 
@@ -191,15 +204,16 @@ static hoc_status grow_push(growlist *g, size_t x) {
   return HOC_OK;
 }
 
-/* Blocks: vertices, edges, element interiors; their nodes, footprints,
- * unknowns and carried nodes. */
-static hoc_status build_blocks(opt *o) {
+/* Blocks of family 0: vertices, edges, element interiors; of family 1:
+ * single nodes. Their nodes, footprints, unknowns and carried nodes. */
+static hoc_status build_blocks(opt *o, int family) {
+  o->B = &o->fam[family];
   hoc_mesh *m = o->m;
   size_t nn = m->n_nodes, ne = m->n_elems, np = (size_t)o->np;
   int p = m->order;
-  HOC_ALLOC(o->node_block, nn);
-  HOC_ALLOC(o->node_off, nn);
-  for (size_t i = 0; i < nn; ++i) o->node_block[i] = SIZE_MAX;
+  HOC_ALLOC(o->B->node_block, nn);
+  HOC_ALLOC(o->B->node_off, nn);
+  for (size_t i = 0; i < nn; ++i) o->B->node_block[i] = SIZE_MAX;
   hoc_hash edges = {0};
   growlist start = {0}, nodes = {0};
   hoc_status status = HOC_OK;
@@ -207,12 +221,24 @@ static hoc_status build_blocks(opt *o) {
   /* vertex blocks first, then edge blocks, then interior blocks */
   for (int kind = 0; kind < 3; ++kind)
     for (size_t e = 0; e < ne; ++e) {
+      if (family == 1) { /* every free node alone, in element order */
+        if (kind) break;
+        const size_t *cn = m->conn + e * np;
+        for (size_t k = 0; k < np; ++k) {
+          size_t i = cn[k];
+          if (!o->ndof[i] || o->B->node_block[i] != SIZE_MAX) continue;
+          o->B->node_block[i] = start.n;
+          HOC_TRY_GOTO(grow_push(&start, nodes.n), done);
+          HOC_TRY_GOTO(grow_push(&nodes, i), done);
+        }
+        continue;
+      }
       const size_t *cn = m->conn + e * np;
       if (kind == 0) {
         for (int k = 0; k < 3; ++k) {
           size_t i = cn[k];
-          if (!o->ndof[i] || o->node_block[i] != SIZE_MAX) continue;
-          o->node_block[i] = start.n;
+          if (!o->ndof[i] || o->B->node_block[i] != SIZE_MAX) continue;
+          o->B->node_block[i] = start.n;
           HOC_TRY_GOTO(grow_push(&start, nodes.n), done);
           HOC_TRY_GOTO(grow_push(&nodes, i), done);
         }
@@ -224,9 +250,9 @@ static hoc_status build_blocks(opt *o) {
           size_t first = nodes.n;
           for (int j = 0; j < p - 1; ++j) {
             size_t i = cn[3 + k * (p - 1) + j];
-            if (!o->ndof[i] || o->node_block[i] != SIZE_MAX) continue;
+            if (!o->ndof[i] || o->B->node_block[i] != SIZE_MAX) continue;
             if (nodes.n == first) HOC_TRY_GOTO(grow_push(&start, nodes.n), done);
-            o->node_block[i] = start.n - 1;
+            o->B->node_block[i] = start.n - 1;
             HOC_TRY_GOTO(grow_push(&nodes, i), done);
           }
         }
@@ -234,32 +260,32 @@ static hoc_status build_blocks(opt *o) {
         size_t first = nodes.n;
         for (size_t k = 3 * (size_t)p; k < np; ++k) {
           size_t i = cn[k];
-          if (!o->ndof[i] || o->node_block[i] != SIZE_MAX) continue;
+          if (!o->ndof[i] || o->B->node_block[i] != SIZE_MAX) continue;
           if (nodes.n == first) HOC_TRY_GOTO(grow_push(&start, nodes.n), done);
-          o->node_block[i] = start.n - 1;
+          o->B->node_block[i] = start.n - 1;
           HOC_TRY_GOTO(grow_push(&nodes, i), done);
         }
       }
     }
   size_t nb = start.n;
-  o->n_blocks = nb;
+  o->B->n_blocks = nb;
   HOC_TRY_GOTO(grow_push(&start, nodes.n), done);
-  o->bn_start = start.v;
-  o->bn_node = nodes.v;
+  o->B->bn_start = start.v;
+  o->B->bn_node = nodes.v;
   start.v = nodes.v = NULL;
   /* unknowns */
-  o->bd_start = hoc_calloc(nb + 1, sizeof *o->bd_start);
-  if (!o->bd_start) {
+  o->B->bd_start = hoc_calloc(nb + 1, sizeof *o->B->bd_start);
+  if (!o->B->bd_start) {
     status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
     goto done;
   }
   for (size_t b = 0; b < nb; ++b) {
     int off = 0;
-    for (size_t a = o->bn_start[b]; a < o->bn_start[b + 1]; ++a) {
-      o->node_off[o->bn_node[a]] = off;
-      off += o->ndof[o->bn_node[a]];
+    for (size_t a = o->B->bn_start[b]; a < o->B->bn_start[b + 1]; ++a) {
+      o->B->node_off[o->B->bn_node[a]] = off;
+      off += o->ndof[o->B->bn_node[a]];
     }
-    o->bd_start[b + 1] = o->bd_start[b] + (size_t)off;
+    o->B->bd_start[b + 1] = o->B->bd_start[b] + (size_t)off;
     if (off > o->max_nd) o->max_nd = off;
   }
   /* footprints: the elements of the block's nodes */
@@ -267,8 +293,8 @@ static hoc_status build_blocks(opt *o) {
     growlist fs = {0}, fe = {0};
     for (size_t b = 0; b < nb && status == HOC_OK; ++b) {
       status = grow_push(&fs, fe.n);
-      for (size_t a = o->bn_start[b]; a < o->bn_start[b + 1] && status == HOC_OK; ++a) {
-        size_t i = o->bn_node[a];
+      for (size_t a = o->B->bn_start[b]; a < o->B->bn_start[b + 1] && status == HOC_OK; ++a) {
+        size_t i = o->B->bn_node[a];
         for (size_t c = o->ne_start[i]; c < o->ne_start[i + 1] && status == HOC_OK; ++c) {
           size_t e = o->ne_elem[c];
           int seen = 0;
@@ -278,8 +304,8 @@ static hoc_status build_blocks(opt *o) {
       }
     }
     if (status == HOC_OK) status = grow_push(&fs, fe.n);
-    o->be_start = fs.v;
-    o->be_elem = fe.v;
+    o->B->be_start = fs.v;
+    o->B->be_elem = fe.v;
     if (status != HOC_OK) goto done;
   }
   /* carried nodes of face-interior vertex blocks */
@@ -291,8 +317,9 @@ static hoc_status build_blocks(opt *o) {
     size_t wcap = 0;
     for (size_t b = 0; b < nb && status == HOC_OK; ++b) {
       status = grow_push(&cs, cn.n);
-      size_t k = o->bn_node[o->bn_start[b]];
-      int vertex = o->bn_start[b + 1] - o->bn_start[b] == 1 && p >= 2 && o->ndof[k] == 2;
+      size_t k = o->B->bn_node[o->B->bn_start[b]];
+      int vertex = family == 0 && o->B->bn_start[b + 1] - o->B->bn_start[b] == 1 && p >= 2 &&
+                   o->ndof[k] == 2;
       for (size_t a = o->ne_start[k]; a < o->ne_start[k + 1] && vertex; ++a) vertex = o->ne_local[a] < 3;
       if (!vertex) continue;
       for (size_t a = o->ne_start[k]; a < o->ne_start[k + 1] && status == HOC_OK; ++a) {
@@ -323,9 +350,9 @@ static hoc_status build_blocks(opt *o) {
       }
     }
     if (status == HOC_OK) status = grow_push(&cs, cn.n);
-    o->carry_start = cs.v;
-    o->carry_node = cn.v;
-    o->carry_w = w;
+    o->B->carry_start = cs.v;
+    o->B->carry_node = cn.v;
+    o->B->carry_w = w;
     if (status != HOC_OK) goto done;
   }
   /* colours: blocks touching a common element differ; every element's
@@ -342,10 +369,10 @@ static hoc_status build_blocks(opt *o) {
     }
     for (size_t b = 0; b < nb; ++b) color[b] = -1;
     for (size_t b = 0; b < nb && status == HOC_OK; ++b) {
-      for (size_t a = o->be_start[b]; a < o->be_start[b + 1]; ++a) {
-        const size_t *cn = m->conn + o->be_elem[a] * np;
+      for (size_t a = o->B->be_start[b]; a < o->B->be_start[b + 1]; ++a) {
+        const size_t *cn = m->conn + o->B->be_elem[a] * np;
         for (size_t k = 0; k < np; ++k) {
-          size_t b2 = o->node_block[cn[k]];
+          size_t b2 = o->B->node_block[cn[k]];
           if (b2 != SIZE_MAX && color[b2] >= 0) stamp[color[b2]] = b + 1;
         }
       }
@@ -364,13 +391,13 @@ static hoc_status build_blocks(opt *o) {
       color[b] = c;
       if (c + 1 > max_colors) max_colors = c + 1;
     }
-    o->n_colors = max_colors;
-    if (status == HOC_OK) status = csr_alloc((size_t)max_colors, nb, &o->color_start, &o->color_block);
+    o->B->n_colors = max_colors;
+    if (status == HOC_OK) status = csr_alloc((size_t)max_colors, nb, &o->B->color_start, &o->B->color_block);
     if (status == HOC_OK) {
-      for (size_t b = 0; b < nb; ++b) o->color_start[color[b] + 1]++;
-      csr_finish_counts((size_t)max_colors, o->color_start);
-      for (size_t b = 0; b < nb; ++b) o->color_block[o->color_start[color[b]]++] = b;
-      csr_restore((size_t)max_colors, o->color_start);
+      for (size_t b = 0; b < nb; ++b) o->B->color_start[color[b] + 1]++;
+      csr_finish_counts((size_t)max_colors, o->B->color_start);
+      for (size_t b = 0; b < nb; ++b) o->B->color_block[o->B->color_start[color[b]]++] = b;
+      csr_restore((size_t)max_colors, o->B->color_start);
     }
     free(color);
     free(stamp);
@@ -423,8 +450,12 @@ static hoc_status setup(opt *o, hoc_mesh *m, hoc_measure measure, int fix_curves
     else if (m->dim[i] == HOC_ON_CURVE && !fix_curves && !m->model->curves[m->entity[i]].degenerate)
       o->ndof[i] = 1;
   }
-  HOC_TRY(build_blocks(o));
-  size_t nb = o->n_blocks;
+  HOC_TRY(build_blocks(o, 1));
+  HOC_TRY(build_blocks(o, 0)); /* family 0 is current by default */
+  size_t nb = o->fam[0].n_blocks > o->fam[1].n_blocks ? o->fam[0].n_blocks : o->fam[1].n_blocks;
+  size_t nd_total = o->fam[0].bd_start[o->fam[0].n_blocks] > o->fam[1].bd_start[o->fam[1].n_blocks]
+                        ? o->fam[0].bd_start[o->fam[0].n_blocks]
+                        : o->fam[1].bd_start[o->fam[1].n_blocks];
   HOC_ALLOC(o->dz, 6 * nn);
   HOC_ALLOC(o->normal, 3 * m->n_slots + 3);
   HOC_ALLOC(o->delta, ne);
@@ -434,7 +465,7 @@ static hoc_status setup(opt *o, hoc_mesh *m, hoc_measure measure, int fix_curves
   HOC_ALLOC(o->hsize, nn);
   HOC_ALLOC(o->active, nn);
   HOC_ALLOC(o->moving, nn);
-  HOC_ALLOC(o->step, o->bd_start[nb] + 1);
+  HOC_ALLOC(o->step, nd_total + 1);
   HOC_ALLOC(o->alpha, nb + 1);
   HOC_ALLOC(o->f0, nb + 1);
   HOC_ALLOC(o->fnew, nb + 1);
@@ -632,7 +663,7 @@ static hoc_status sweep_start(opt *o, double *objective, double *min_q, size_t *
       if (!o->valid[e]) {
         double smin, scale;
         sigma_stats(o, x, n, &smin, &scale);
-        double eps = 1e-2 * scale;
+        double eps = 1e-3 * scale;
         o->delta[e] = smin < eps ? sqrt(eps * (eps - smin)) : 0;
         if (!(o->delta[e] > 0)) o->delta[e] = eps;
       }
@@ -803,27 +834,27 @@ static void commit(opt *o, size_t k) {
 /* Blocks ------------------------------------------------------------------- */
 
 static double carry_weight(const opt *o, size_t b, size_t node) {
-  for (size_t j = o->carry_start[b]; j < o->carry_start[b + 1]; ++j)
-    if (o->carry_node[j] == node) return o->carry_w[j];
+  for (size_t j = o->B->carry_start[b]; j < o->B->carry_start[b + 1]; ++j)
+    if (o->B->carry_node[j] == node) return o->B->carry_w[j];
   return 0;
 }
 
 static void set_moving(opt *o, size_t b, unsigned char v) {
-  for (size_t a = o->bn_start[b]; a < o->bn_start[b + 1]; ++a) o->moving[o->bn_node[a]] = v;
-  for (size_t j = o->carry_start[b]; j < o->carry_start[b + 1]; ++j) o->moving[o->carry_node[j]] = v;
+  for (size_t a = o->B->bn_start[b]; a < o->B->bn_start[b + 1]; ++a) o->moving[o->B->bn_node[a]] = v;
+  for (size_t j = o->B->carry_start[b]; j < o->B->carry_start[b + 1]; ++j) o->moving[o->B->carry_node[j]] = v;
 }
 
 /* Local objective of block b at the current state: f, gradient g[nd] and
  * Gauss-Newton matrix H[nd][nd] in its unknowns. */
 static void block_model(const opt *o, size_t b, scratch *s, double *f, double *g, double *H) {
   const hoc_mesh *m = o->m;
-  int np = o->np, nd = (int)(o->bd_start[b + 1] - o->bd_start[b]);
-  int carries = o->carry_start[b + 1] > o->carry_start[b];
+  int np = o->np, nd = (int)(o->B->bd_start[b + 1] - o->B->bd_start[b]);
+  int carries = o->B->carry_start[b + 1] > o->B->carry_start[b];
   *f = 0;
   memset(g, 0, (size_t)nd * sizeof *g);
   memset(H, 0, (size_t)nd * (size_t)nd * sizeof *H);
-  for (size_t a = o->be_start[b]; a < o->be_start[b + 1]; ++a) {
-    size_t e = o->be_elem[a];
+  for (size_t a = o->B->be_start[b]; a < o->B->be_start[b + 1]; ++a) {
+    size_t e = o->B->be_elem[a];
     const size_t *cn = m->conn + e * (size_t)np;
     gather(o, e, s->x, s->n);
     int nr = elem_residuals(o, e, s->x, s->n, s->r, s->J, NULL);
@@ -833,8 +864,8 @@ static void block_model(const opt *o, size_t b, scratch *s, double *f, double *g
       size_t node = cn[i];
       int off, nd_i;
       double w = 1;
-      if (o->node_block[node] == b) {
-        off = o->node_off[node];
+      if (o->B->node_block[node] == b) {
+        off = o->B->node_off[node];
         nd_i = o->ndof[node];
       } else if (carries && (w = carry_weight(o, b, node)) > 0) {
         off = 0;
@@ -936,14 +967,14 @@ static int line_monotone(const opt *o, size_t l) {
 static int block_trial_flagged(const opt *o, size_t b, scratch *s, double *f) {
   const hoc_mesh *m = o->m;
   *f = 0;
-  for (size_t a = o->bn_start[b]; a < o->bn_start[b + 1]; ++a) {
-    size_t k = o->bn_node[a];
+  for (size_t a = o->B->bn_start[b]; a < o->B->bn_start[b + 1]; ++a) {
+    size_t k = o->B->bn_node[a];
     if (m->dim[k] != HOC_ON_CURVE) continue;
     for (size_t c = o->nl_start[k]; c < o->nl_start[k + 1]; ++c)
       if (!line_monotone(o, o->nl_line[c])) return 0;
   }
-  for (size_t a = o->be_start[b]; a < o->be_start[b + 1]; ++a) {
-    size_t e = o->be_elem[a];
+  for (size_t a = o->B->be_start[b]; a < o->B->be_start[b + 1]; ++a) {
+    size_t e = o->B->be_elem[a];
     gather(o, e, s->x, s->n);
     if (o->pvalid[e] && !param_valid(o, e, s->uv)) return 0;
     double smin;
@@ -965,12 +996,12 @@ static int block_trial(opt *o, size_t b, scratch *s, double *f) {
  * and the nodes it carries. Returns 0 if one leaves a non-closed range. */
 static int set_trial_params(opt *o, size_t b) {
   const hoc_mesh *m = o->m;
-  const double *st = o->step + o->bd_start[b];
+  const double *st = o->step + o->B->bd_start[b];
   double al = o->alpha[b];
   int inside = 1;
-  for (size_t a = o->bn_start[b]; a < o->bn_start[b + 1]; ++a) {
-    size_t k = o->bn_node[a];
-    int off = o->node_off[k];
+  for (size_t a = o->B->bn_start[b]; a < o->B->bn_start[b + 1]; ++a) {
+    size_t k = o->B->bn_node[a];
+    int off = o->B->node_off[k];
     if (m->dim[k] == HOC_ON_FACE) {
       const hoc_cad_face *f = &o->model->faces[m->entity[k]];
       for (int d = 0; d < 2; ++d) {
@@ -986,11 +1017,11 @@ static int set_trial_params(opt *o, size_t b) {
       if (!(c->period > 0) && (v < c->lo || v > c->hi)) inside = 0;
     }
   }
-  for (size_t j = o->carry_start[b]; j < o->carry_start[b + 1]; ++j) {
-    size_t c = o->carry_node[j];
+  for (size_t j = o->B->carry_start[b]; j < o->B->carry_start[b + 1]; ++j) {
+    size_t c = o->B->carry_node[j];
     const hoc_cad_face *f = &o->model->faces[m->entity[c]];
     for (int d = 0; d < 2; ++d) {
-      double v = m->param[2 * c + d] + al * o->carry_w[j] * st[d];
+      double v = m->param[2 * c + d] + al * o->B->carry_w[j] * st[d];
       o->tpar[2 * c + d] = v;
       if (!(f->period[d] > 0) && (v < f->lo[d] || v > f->hi[d])) inside = 0;
     }
@@ -1000,14 +1031,14 @@ static int set_trial_params(opt *o, size_t b) {
 
 /* Block b touches a tangled element or one next to it. */
 static int near_tangled(const opt *o, size_t b) {
-  for (size_t a = o->be_start[b]; a < o->be_start[b + 1]; ++a)
-    if (o->region[o->be_elem[a]] || !o->valid[o->be_elem[a]]) return 1;
+  for (size_t a = o->B->be_start[b]; a < o->B->be_start[b + 1]; ++a)
+    if (o->region[o->B->be_elem[a]] || !o->valid[o->B->be_elem[a]]) return 1;
   return 0;
 }
 
 static int block_active(const opt *o, size_t b) {
-  for (size_t a = o->bn_start[b]; a < o->bn_start[b + 1]; ++a)
-    if (o->active[o->bn_node[a]]) return 1;
+  for (size_t a = o->B->bn_start[b]; a < o->B->bn_start[b + 1]; ++a)
+    if (o->active[o->B->bn_node[a]]) return 1;
   return 0;
 }
 
@@ -1015,10 +1046,10 @@ static int block_active(const opt *o, size_t b) {
  * backtracking line search. *moved counts the nodes moved. */
 static hoc_status do_color(opt *o, int color, scratch *scr, int nthreads, size_t *moved) {
   hoc_mesh *m = o->m;
-  size_t first = o->color_start[color], last = o->color_start[color + 1];
+  size_t first = o->B->color_start[color], last = o->B->color_start[color + 1];
   size_t n = 0;
   for (size_t a = first; a < last; ++a) {
-    size_t b = o->color_block[a];
+    size_t b = o->B->color_block[a];
     if (block_active(o, b)) o->list[n++] = b;
   }
   *moved = 0;
@@ -1028,21 +1059,21 @@ static hoc_status do_color(opt *o, int color, scratch *scr, int nthreads, size_t
   for (size_t a = 0; a < n; ++a) {
     size_t b = list[a];
     scratch *s = &scr[omp_get_thread_num()];
-    for (size_t c = o->bn_start[b]; c < o->bn_start[b + 1]; ++c) o->active[o->bn_node[c]] = 0;
-    int nd = (int)(o->bd_start[b + 1] - o->bd_start[b]);
+    for (size_t c = o->B->bn_start[b]; c < o->B->bn_start[b + 1]; ++c) o->active[o->B->bn_node[c]] = 0;
+    int nd = (int)(o->B->bd_start[b + 1] - o->B->bd_start[b]);
     double f;
     block_model(o, b, s, &f, s->g, s->H);
     o->f0[b] = f;
     o->state[b] = 0;
-    double *st = o->step + o->bd_start[b];
+    double *st = o->step + o->B->bd_start[b];
     if (!damped_solve(nd, s->H, s->g, s->L, st)) continue;
     double slope = 0;
     for (int c = 0; c < nd; ++c) slope += s->g[c] * st[c];
     /* limit every node's displacement to a quarter of its local size */
     double alpha = 1, len_max = 0;
-    for (size_t c = o->bn_start[b]; c < o->bn_start[b + 1]; ++c) {
-      size_t k = o->bn_node[c];
-      const double *dz = o->dz + 6 * k, *sk = st + o->node_off[k];
+    for (size_t c = o->B->bn_start[b]; c < o->B->bn_start[b + 1]; ++c) {
+      size_t k = o->B->bn_node[c];
+      const double *dz = o->dz + 6 * k, *sk = st + o->B->node_off[k];
       double dx[3];
       for (int d = 0; d < 3; ++d) dx[d] = dz[d] * sk[0] + (o->ndof[k] == 2 ? dz[3 + d] * sk[1] : 0);
       double len = sqrt(dx[0] * dx[0] + dx[1] * dx[1] + dx[2] * dx[2]);
@@ -1060,7 +1091,7 @@ static hoc_status do_color(opt *o, int color, scratch *scr, int nthreads, size_t
   size_t n_eval = 0;
   for (size_t a = 0; a < nt; ++a) {
     size_t b = list[a];
-    n_eval += o->bn_start[b + 1] - o->bn_start[b] + o->carry_start[b + 1] - o->carry_start[b];
+    n_eval += o->B->bn_start[b + 1] - o->B->bn_start[b] + o->B->carry_start[b + 1] - o->B->carry_start[b];
   }
   size_t *elist = hoc_calloc(n_eval + 1, sizeof *elist);
   HOC_CHECK(elist, HOC_ERR_MEMORY, "out of memory");
@@ -1070,8 +1101,8 @@ static hoc_status do_color(opt *o, int color, scratch *scr, int nthreads, size_t
     for (size_t a = 0; a < nt; ++a) {
       size_t b = list[a];
       for (int tries = 0; tries < 40 && !set_trial_params(o, b); ++tries) o->alpha[b] *= 0.5;
-      for (size_t c = o->bn_start[b]; c < o->bn_start[b + 1]; ++c) elist[ne_list++] = o->bn_node[c];
-      for (size_t j = o->carry_start[b]; j < o->carry_start[b + 1]; ++j) elist[ne_list++] = o->carry_node[j];
+      for (size_t c = o->B->bn_start[b]; c < o->B->bn_start[b + 1]; ++c) elist[ne_list++] = o->B->bn_node[c];
+      for (size_t j = o->B->carry_start[b]; j < o->B->carry_start[b + 1]; ++j) elist[ne_list++] = o->B->carry_node[j];
     }
     HOC_TRY_GOTO(eval_trials(o, elist, ne_list), done);
 #pragma omp parallel for schedule(dynamic, 8) num_threads(nthreads)
@@ -1081,8 +1112,8 @@ static hoc_status do_color(opt *o, int color, scratch *scr, int nthreads, size_t
       double f;
       int ok = block_trial(o, b, s, &f);
       if (ok && f <= o->f0[b] + 1e-4 * o->alpha[b] * o->slope[b]) {
-        for (size_t c = o->bn_start[b]; c < o->bn_start[b + 1]; ++c) commit(o, o->bn_node[c]);
-        for (size_t j = o->carry_start[b]; j < o->carry_start[b + 1]; ++j) commit(o, o->carry_node[j]);
+        for (size_t c = o->B->bn_start[b]; c < o->B->bn_start[b + 1]; ++c) commit(o, o->B->bn_node[c]);
+        for (size_t j = o->B->carry_start[b]; j < o->B->carry_start[b + 1]; ++j) commit(o, o->B->carry_node[j]);
         o->fnew[b] = f;
         o->state[b] = 2;
       } else {
@@ -1097,12 +1128,12 @@ static hoc_status do_color(opt *o, int color, scratch *scr, int nthreads, size_t
         continue;
       }
       o->state[b] = 0;
-      size_t nodes = o->bn_start[b + 1] - o->bn_start[b];
+      size_t nodes = o->B->bn_start[b + 1] - o->B->bn_start[b];
       *moved += nodes;
       if (o->f0[b] - o->fnew[b] < o->min_gain * (double)nodes && !near_tangled(o, b)) continue;
       /* wake every node of the elements it touches (itself included) */
-      for (size_t c = o->be_start[b]; c < o->be_start[b + 1]; ++c) {
-        const size_t *cn = m->conn + o->be_elem[c] * (size_t)o->np;
+      for (size_t c = o->B->be_start[b]; c < o->B->be_start[b + 1]; ++c) {
+        const size_t *cn = m->conn + o->B->be_elem[c] * (size_t)o->np;
         for (int i = 0; i < o->np; ++i) o->active[cn[i]] = 1;
       }
     }
@@ -1112,10 +1143,10 @@ static hoc_status do_color(opt *o, int color, scratch *scr, int nthreads, size_t
   /* validity may have been gained */
 #pragma omp parallel for schedule(dynamic, 8) num_threads(nthreads)
   for (size_t a = first; a < last; ++a) {
-    size_t b = o->color_block[a];
+    size_t b = o->B->color_block[a];
     scratch *s = &scr[omp_get_thread_num()];
-    for (size_t c = o->be_start[b]; c < o->be_start[b + 1]; ++c) {
-      size_t e = o->be_elem[c];
+    for (size_t c = o->B->be_start[b]; c < o->B->be_start[b + 1]; ++c) {
+      size_t e = o->B->be_elem[c];
       if (!o->valid[e]) {
         gather(o, e, s->x, s->n);
         o->valid[e] = (unsigned char)!hoc_element_tangled(o->t, s->x, s->n);
@@ -1214,11 +1245,16 @@ hoc_status hoc_mesh_optimize(hoc_mesh *mesh, const hoc_optimize_options *options
     /* a step worth less than a small share of the average node's part of f
      * puts its block to sleep */
     ctx.min_gain = o.tolerance * f / (double)(res.free_nodes ? res.free_nodes : 1);
-    for (int c = 0; c < ctx.n_colors; ++c) {
-      size_t mc;
-      HOC_TRY_GOTO(do_color(&ctx, c, scr, nthreads, &mc), done);
-      moved += mc;
+    /* the natural blocks, then every node on its own */
+    for (int fam = 0; fam < 2; ++fam) {
+      ctx.B = &ctx.fam[fam];
+      for (int c = 0; c < ctx.B->n_colors; ++c) {
+        size_t mc;
+        HOC_TRY_GOTO(do_color(&ctx, c, scr, nthreads, &mc), done);
+        moved += mc;
+      }
     }
+    ctx.B = &ctx.fam[0];
     HOC_TRY_GOTO(sweep_start(&ctx, &f, &qmin, &tangled), done);
     res.iterations = it;
     if (o.progress) {
@@ -1250,24 +1286,24 @@ done:
 /* Local objective of block b with unknown `dof` moved by h (the nodes it
  * carries follow), positions and normals evaluated on the CAD. */
 static hoc_status block_f_at(opt *o, size_t b, int dof, double h, scratch *s, double *f) {
-  double *st = o->step + o->bd_start[b];
-  int nd = (int)(o->bd_start[b + 1] - o->bd_start[b]);
+  double *st = o->step + o->B->bd_start[b];
+  int nd = (int)(o->B->bd_start[b + 1] - o->B->bd_start[b]);
   for (int c = 0; c < nd; ++c) st[c] = c == dof ? h : 0;
   o->alpha[b] = 1;
   set_trial_params(o, b);
   size_t n = 0;
-  size_t nlist = o->bn_start[b + 1] - o->bn_start[b] + o->carry_start[b + 1] - o->carry_start[b];
+  size_t nlist = o->B->bn_start[b + 1] - o->B->bn_start[b] + o->B->carry_start[b + 1] - o->B->carry_start[b];
   size_t *list = hoc_calloc(nlist + 1, sizeof *list);
   HOC_CHECK(list, HOC_ERR_MEMORY, "out of memory");
-  for (size_t c = o->bn_start[b]; c < o->bn_start[b + 1]; ++c) list[n++] = o->bn_node[c];
-  for (size_t j = o->carry_start[b]; j < o->carry_start[b + 1]; ++j) list[n++] = o->carry_node[j];
+  for (size_t c = o->B->bn_start[b]; c < o->B->bn_start[b + 1]; ++c) list[n++] = o->B->bn_node[c];
+  for (size_t j = o->B->carry_start[b]; j < o->B->carry_start[b + 1]; ++j) list[n++] = o->B->carry_node[j];
   hoc_status st2 = eval_trials(o, list, n);
   free(list);
   HOC_TRY(st2);
   set_moving(o, b, 1);
   *f = 0;
-  for (size_t a = o->be_start[b]; a < o->be_start[b + 1]; ++a) {
-    size_t e = o->be_elem[a];
+  for (size_t a = o->B->be_start[b]; a < o->B->be_start[b + 1]; ++a) {
+    size_t e = o->B->be_elem[a];
     gather(o, e, s->x, s->n);
     int nr = elem_residuals(o, e, s->x, s->n, s->r, NULL, NULL);
     for (int q = 0; q < nr; ++q) *f += s->r[q] * s->r[q];
@@ -1293,18 +1329,18 @@ hoc_status hoc_mesh_check_gradient(hoc_mesh *mesh, hoc_measure measure, int fix_
   double f, qmin;
   size_t tangled;
   HOC_TRY_GOTO(sweep_start(&ctx, &f, &qmin, &tangled), done);
-  size_t stride = ctx.n_blocks > (size_t)samples ? ctx.n_blocks / (size_t)samples : 1;
+  size_t stride = ctx.B->n_blocks > (size_t)samples ? ctx.B->n_blocks / (size_t)samples : 1;
   double worst = 0, gmax = 0;
-  for (size_t b = 0; b < ctx.n_blocks; b += stride) {
+  for (size_t b = 0; b < ctx.B->n_blocks; b += stride) {
     double fl;
     block_model(&ctx, b, scr, &fl, scr->g, scr->H);
-    int nd = (int)(ctx.bd_start[b + 1] - ctx.bd_start[b]);
+    int nd = (int)(ctx.B->bd_start[b + 1] - ctx.B->bd_start[b]);
     for (int d = 0; d < nd; ++d) {
       /* the node owning this unknown sets the scale of the step */
-      size_t k = ctx.bn_node[ctx.bn_start[b]];
-      for (size_t c = ctx.bn_start[b]; c < ctx.bn_start[b + 1]; ++c)
-        if (ctx.node_off[ctx.bn_node[c]] <= d) k = ctx.bn_node[c];
-      int dd = d - ctx.node_off[k];
+      size_t k = ctx.B->bn_node[ctx.B->bn_start[b]];
+      for (size_t c = ctx.B->bn_start[b]; c < ctx.B->bn_start[b + 1]; ++c)
+        if (ctx.B->node_off[ctx.B->bn_node[c]] <= d) k = ctx.B->bn_node[c];
+      int dd = d - ctx.B->node_off[k];
       const double *dz = ctx.dz + 6 * k + 3 * dd;
       double speed = sqrt(dz[0] * dz[0] + dz[1] * dz[1] + dz[2] * dz[2]);
       if (!(speed > 0)) continue;
