@@ -122,12 +122,19 @@ double hoc_element_quality(const hoc_quality_tables *t, hoc_measure measure, con
     if (!(rel >= smin)) smin = rel;
     sum += t->w[q] * e * e;
   }
-  for (int j = 0; j < np; ++j) {
-    double a1[3], a2[3], c[3];
-    jacobian_at(np, x, t->Gn + 2 * (size_t)j * np, a1, a2);
+  for (int j = 0; j < np + t->nv; ++j) {
+    double a1[3], a2[3], c[3], nv[3];
+    const double *nj = n + 3 * j;
+    if (j < np) {
+      jacobian_at(np, x, t->Gn + 2 * (size_t)j * np, a1, a2);
+    } else {
+      jacobian_at(np, x, t->Gv + 2 * (size_t)(j - np) * np, a1, a2);
+      normal_at(np, n, t->Nv + (size_t)(j - np) * np, nv);
+      nj = nv;
+    }
     cross(a1, a2, c);
     double cl = sqrt(dot(c, c));
-    double sig = dot(c, n + 3 * j) > 0 ? cl : -cl;
+    double sig = dot(c, nj) > 0 ? cl : -cl;
     double rel = sig / (dot(a1, a1) + dot(a2, a2));
     if (!(rel > 0)) tangled = 1;
     if (!(rel >= smin)) smin = rel;
@@ -225,6 +232,13 @@ int hoc_element_nodes_tangled(const hoc_quality_tables *t, const double *x, cons
     jacobian_at(np, x, t->Gn + 2 * (size_t)j * np, a1, a2);
     cross(a1, a2, c);
     if (!(dot(c, n + 3 * j) > 0) || !(dot(c, c) > 0)) return 1;
+  }
+  for (int j = 0; j < t->nv; ++j) {
+    double a1[3], a2[3], c[3], nv[3];
+    jacobian_at(np, x, t->Gv + 2 * (size_t)j * np, a1, a2);
+    normal_at(np, n, t->Nv + (size_t)j * np, nv);
+    cross(a1, a2, c);
+    if (!(dot(c, nv) > 0) || !(dot(c, c) > 0)) return 1;
   }
   return 0;
 }

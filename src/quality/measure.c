@@ -15,6 +15,46 @@ static double now(void) {
   return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
+/* q of every element with tables t, in parallel; normals from the CAD. */
+hoc_status hoc_mesh_measure_tables(const hoc_mesh *mesh, const hoc_quality_tables *t,
+                                   hoc_measure measure, double *q) {
+  size_t ne = mesh->n_elems;
+  int np = mesh->np;
+  HOC_CHECK(t->np == np, HOC_ERR_ARGUMENT, "tables of order %d for a mesh of order %d", t->p,
+            mesh->order);
+  double *normal;
+  HOC_ALLOC(normal, 3 * mesh->n_slots + 3);
+  hoc_status status = hoc_mesh_slot_normals(mesh, normal);
+  int alloc_failed = 0;
+  if (status == HOC_OK) {
+#pragma omp parallel
+    {
+      double *x = malloc(6 * (size_t)np * sizeof *x);
+      if (!x) {
+#pragma omp atomic write
+        alloc_failed = 1;
+      }
+      double *n = x ? x + 3 * np : NULL;
+#pragma omp for schedule(static)
+      for (size_t e = 0; e < ne; ++e) {
+        if (!x) continue;
+        const size_t *cn = mesh->conn + e * (size_t)np;
+        const size_t *sl = mesh->elem_slot + e * (size_t)np;
+        for (int i = 0; i < np; ++i) {
+          memcpy(x + 3 * i, mesh->xyz + 3 * cn[i], 3 * sizeof *x);
+          memcpy(n + 3 * i, normal + 3 * sl[i], 3 * sizeof *n);
+        }
+        double eta;
+        q[e] = hoc_element_quality(t, measure, x, n, &eta, NULL);
+      }
+      free(x);
+    }
+  }
+  free(normal);
+  if (alloc_failed) return HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
+  return status;
+}
+
 hoc_status hoc_mesh_measure(const hoc_mesh *mesh, hoc_measure measure, double *quality,
                             unsigned char *tangled, hoc_quality_stats *stats) {
   HOC_CHECK(mesh, HOC_ERR_ARGUMENT, "no mesh given");
@@ -24,48 +64,15 @@ hoc_status hoc_mesh_measure(const hoc_mesh *mesh, hoc_measure measure, double *q
   const hoc_quality_tables *t;
   HOC_TRY(hoc_quality_tables_get(mesh->order, mesh->nodeset, &t));
   size_t ne = mesh->n_elems;
-  int np = mesh->np;
-  double *normal, *q = quality;
-  HOC_ALLOC(normal, 3 * mesh->n_slots);
-  hoc_status status = HOC_OK;
+  double *q = quality;
   if (!q) {
     q = hoc_calloc(ne, sizeof *q);
-    if (!q) {
-      free(normal);
-      return HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
-    }
+    HOC_CHECK(q, HOC_ERR_MEMORY, "out of memory");
   }
-  unsigned char *tg = tangled;
-  HOC_TRY_GOTO(hoc_mesh_slot_normals(mesh, normal), done);
-  int alloc_failed = 0;
-#pragma omp parallel
-  {
-    double *x = malloc(6 * (size_t)np * sizeof *x);
-    if (!x) {
-#pragma omp atomic write
-      alloc_failed = 1;
-    }
-    double *n = x ? x + 3 * np : NULL;
-#pragma omp for schedule(static)
-    for (size_t e = 0; e < ne; ++e) {
-      if (!x) continue;
-      const size_t *cn = mesh->conn + e * (size_t)np;
-      const size_t *sl = mesh->elem_slot + e * (size_t)np;
-      for (int i = 0; i < np; ++i) {
-        memcpy(x + 3 * i, mesh->xyz + 3 * cn[i], 3 * sizeof *x);
-        memcpy(n + 3 * i, normal + 3 * sl[i], 3 * sizeof *n);
-      }
-      double eta;
-      q[e] = hoc_element_quality(t, measure, x, n, &eta, NULL);
-      if (tg) tg[e] = q[e] == 0.0;
-    }
-    free(x);
-  }
-  if (alloc_failed) {
-    status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
-    goto done;
-  }
-  if (stats) {
+  hoc_status status = hoc_mesh_measure_tables(mesh, t, measure, q);
+  if (status == HOC_OK && tangled)
+    for (size_t e = 0; e < ne; ++e) tangled[e] = q[e] == 0.0;
+  if (status == HOC_OK && stats) {
     double mn = INFINITY, mx = -INFINITY, sum = 0, sum2 = 0;
     size_t nt = 0;
     for (size_t e = 0; e < ne; ++e) {
@@ -85,8 +92,6 @@ hoc_status hoc_mesh_measure(const hoc_mesh *mesh, hoc_measure measure, double *q
     stats->tangled = nt;
     stats->seconds = now() - t0;
   }
-done:
-  free(normal);
   if (q != quality) free(q);
   return status;
 }

@@ -34,6 +34,9 @@ typedef struct hoc_quality_tables {
   double *G;  /* [nq][np][2] grad_{x~} N_i = W^{-T} grad_xi N_i at the quadrature points */
   double *Gn; /* [np][np][2] the same at the nodes (row j: node j) */
   double *rs; /* [np][2] reference coordinates of the nodes */
+  int nv;     /* validation points: the equispaced lattice of order 2p */
+  double *Nv; /* [nv][np] basis values there (for the interpolated normal) */
+  double *Gv; /* [nv][np][2] ideal-space gradients there */
 } hoc_quality_tables;
 
 /** Quadrature degree used for order p (see docs/quality.md for why). */
@@ -41,6 +44,17 @@ int hoc_quality_degree(int p);
 
 /** Tables for (p, set), built on first use and cached (thread-safe). */
 hoc_status hoc_quality_tables_get(int p, hoc_nodeset set, const hoc_quality_tables **tables);
+
+/** Uncached tables with a quadrature of a chosen degree (tests, studies). */
+hoc_status hoc_quality_tables_create(int p, hoc_nodeset set, int degree,
+                                     hoc_quality_tables **tables);
+void hoc_quality_tables_destroy(hoc_quality_tables **tables);
+
+/** q of every element of a mesh with given tables (hoc_mesh_measure's core).
+ *  q[n_elems]. */
+struct hoc_mesh;
+hoc_status hoc_mesh_measure_tables(const struct hoc_mesh *mesh, const hoc_quality_tables *t,
+                                   hoc_measure measure, double *q);
 
 /** Pointwise distortion eta(S) of Table 1 for d = 2, with the regularised
  *  determinant sigma_delta = (sigma + sqrt(sigma^2 + 4 delta^2)) / 2 (delta = 0:
@@ -59,8 +73,8 @@ double hoc_distortion_point(hoc_measure measure, const double a1[3], const doubl
  *  @param[in] x  [np][3] node positions
  *  @param[in] n  [np][3] unit CAD normals at the nodes (oriented)
  *  @param[out] eta  element distortion (+inf if tangled)
- *  @param[out] min_sigma  smallest sigma / |D phi|^2 over quadrature points
- *                         and nodes (scale-free; <= 0 means tangled)
+ *  @param[out] min_sigma  smallest sigma / |D phi|^2 over quadrature points,
+ *                         nodes and validation points (<= 0 means tangled)
  *  @return q = 1/eta, 0 if tangled */
 double hoc_element_quality(const hoc_quality_tables *t, hoc_measure measure, const double *x,
                            const double *n, double *eta, double *min_sigma);
@@ -94,11 +108,14 @@ double hoc_element_node_residuals(const hoc_quality_tables *t, hoc_measure measu
                                   double *J);
 
 /** Tangled test of Definition 2 (delta = 0): 1 if sigma <= 0 at a
- *  quadrature point or a node. Same test as hoc_element_quality. */
+ *  quadrature point, a node or a validation point. Same test as
+ *  hoc_element_quality. */
 int hoc_element_tangled(const hoc_quality_tables *t, const double *x, const double *n);
 
-/** The node half of that test: 1 if sigma <= 0 at a node. (The residual
- *  functions return the quadrature half as their smallest sigma.) */
+/** The rest of that test: 1 if sigma <= 0 at a node or at a point of the
+ *  validation lattice (the order-2p equispaced points), so that no fold can
+ *  hide between quadrature points. (The residual functions return the
+ *  quadrature half as their smallest sigma.) */
 int hoc_element_nodes_tangled(const hoc_quality_tables *t, const double *x, const double *n);
 
 #endif
