@@ -103,8 +103,8 @@ typedef struct hoc_mesh hoc_mesh;
 /** Options of the linear surface mesher. Zero means "choose". */
 typedef struct hoc_linear_options {
   double size_max;  /**< maximum edge length (0: bounding-box diagonal / 20) */
-  double size_min;  /**< minimum edge length (0: size_max / 50) */
-  double curvature; /**< elements per 2 pi of curvature radius (0: from the order) */
+  double size_min;  /**< minimum edge length (0: size_max / 10) */
+  double curvature; /**< elements per 2 pi of curvature radius (0: 12 for order 1, 8 above) */
   int order;        /**< order the mesh will be raised to, used for the default curvature */
   hoc_progress_fn progress;
   void *progress_user;

@@ -20,8 +20,9 @@ void hoc_linear_options_default(hoc_linear_options *o) {
 /* Default elements per 2 pi of curvature radius: enough that the linear
  * mesh follows curved faces and the curved elements of order p stay valid. */
 static double default_curvature(int order) {
-  (void)order;
-  return 12;
+  /* a linear mesh must follow curved faces with its own chords; curved
+   * elements of order >= 2 follow them exactly and need fewer */
+  return order <= 1 ? 12 : 8;
 }
 
 typedef struct growable {
@@ -152,7 +153,7 @@ hoc_status hoc_mesh_generate_linear_gmsh(hoc_model *model, const hoc_linear_opti
   HOC_CHECK(o.order >= 1 && o.order <= HOC_MAX_ORDER, HOC_ERR_ARGUMENT,
             "order %d out of range 1..%d", o.order, HOC_MAX_ORDER);
   double hmax = o.size_max > 0 ? o.size_max : model->diagonal / 20;
-  double hmin = o.size_min > 0 ? o.size_min : hmax / 50;
+  double hmin = o.size_min > 0 ? o.size_min : hmax / 10;
   HOC_CHECK(hmin <= hmax, HOC_ERR_ARGUMENT, "minimum size %g exceeds maximum size %g", hmin, hmax);
   HOC_CHECK(hmax >= 1e-6 * model->diagonal, HOC_ERR_ARGUMENT,
             "mesh size %g is too small for a model of size %g (at most 10^6 edges across)", hmax,

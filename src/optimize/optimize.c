@@ -776,6 +776,13 @@ static hoc_status eval_trials(opt *o, const size_t *list, size_t n) {
           o->tslot_uv[2 * s] = uv[0];
           o->tslot_uv[2 * s + 1] = uv[1];
           HOC_TRY(face_normal(o, f, uv, du, dv, o->tnormal + 3 * s));
+          /* a small move cannot turn the surface over: where the CAD normal
+           * flips (a folded parametrisation at the boundary, see
+           * hoc_mesh_slot_normals) the slot keeps its orientation */
+          const double *old = o->normal + 3 * s;
+          double *nw = o->tnormal + 3 * s;
+          if (nw[0] * old[0] + nw[1] * old[1] + nw[2] * old[2] < 0)
+            for (int d = 0; d < 3; ++d) nw[d] = -nw[d];
         }
       }
     }
