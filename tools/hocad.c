@@ -70,7 +70,7 @@ static double now(void) {
 /* Options ----------------------------------------------------------------- */
 
 typedef struct options {
-  const char *model, *mesh_in, *out, *vtu, *json;
+  const char *model, *mesh_in, *out, *vtu, *json, *linear;
   int order, threads, quiet, no_output, optimize, have_order, fix_curves, max_iterations,
       check_gradient;
   double size, size_min, curvature;
@@ -162,6 +162,7 @@ static const char *usage_mesh =
     "  --nodes SET          equispaced | fekete | warp-blend (default equispaced);\n"
     "                       files always hold equispaced nodes\n"
     "  --measure M          shape | oddy (default shape)\n"
+    "  --linear M.msh       start from this linear mesh of MODEL instead of meshing\n"
     "  --no-optimize        stop after raising the order\n"
     OPTIMIZE_OPTIONS
     "  -o, --output F.msh   gmsh MSH 4.1 output (default: MODEL-NAME_pP.msh here;\n"
@@ -265,6 +266,8 @@ static int parse(int argc, char **argv, options *o, const char **pos, int max_po
         error_line("--nodes expects equispaced, fekete or warp-blend, got '%s'", v);
         return 0;
       }
+    } else if (mesh && VALUE("--linear")) {
+      o->linear = v;
     } else if (mesh && !strcmp(a, "--no-optimize")) {
       o->optimize = 0;
     } else if (mesh && !strcmp(a, "--no-output")) {
@@ -305,6 +308,8 @@ typedef struct stage {
 typedef struct report {
   stage stages[4];
   int n;
+  double write_seconds; /* writing the mesh files */
+  double model_seconds; /* reading the CAD model */
 } report;
 
 static void print_table(const report *r) {
@@ -395,7 +400,8 @@ static int write_json(const char *path, const options *o, const report *r, const
                s->iterations, s->converged ? "true" : "false", s->objective_initial, s->objective);
     text_add(&t, "}");
   }
-  text_add(&t, "\n  ]\n}\n");
+  text_add(&t, "\n  ],\n  \"model_seconds\": %.6f,\n  \"write_seconds\": %.6f\n}\n", r->model_seconds,
+           r->write_seconds);
   if (t.failed) {
     free(t.s);
     error_line("out of memory writing the report");
@@ -556,6 +562,7 @@ static int cmd_mesh(int argc, char **argv) {
   double t0 = now();
   hoc_status st = hoc_model_open(o.model, &model);
   if (st != HOC_OK) return fail(st, 1);
+  r.model_seconds = now() - t0;
   double bb[6];
   hoc_model_bbox(model, bb);
   if (!o.quiet)
@@ -570,9 +577,22 @@ static int cmd_mesh(int argc, char **argv) {
   lo.size_min = o.size_min;
   lo.curvature = o.curvature;
   lo.order = o.order;
-  progress(&o, "meshing %d faces", hoc_model_num_faces(model));
   t0 = now();
-  st = hoc_mesh_generate_linear(model, &lo, &lin);
+  if (o.linear) {
+    /* a given linear mesh (e.g. gmsh's, to compare elevation on one mesh) */
+    progress(&o, "reading %s", o.linear);
+    hoc_mesh *given = NULL;
+    st = hoc_mesh_read_msh(model, o.linear, &given);
+    if (st == HOC_OK && hoc_mesh_order(given) != 1) {
+      st = hoc_mesh_elevate(given, 1, HOC_NODES_EQUISPACED, &lin);
+      hoc_mesh_destroy(&given);
+    } else {
+      lin = given;
+    }
+  } else {
+    progress(&o, "meshing %d faces", hoc_model_num_faces(model));
+    st = hoc_mesh_generate_linear(model, &lo, &lin);
+  }
   if (st != HOC_OK) {
     code = fail(st, 1);
     goto done;
@@ -611,7 +631,9 @@ static int cmd_mesh(int argc, char **argv) {
     code = fail(st, 0);
     goto done;
   }
+  t0 = now();
   if ((code = write_outputs(&o, final, q, out))) goto done;
+  r.write_seconds = now() - t0;
   if (o.json) {
     if ((code = write_json(o.json, &o, &r, "mesh"))) goto done;
     if (!o.quiet) printf("wrote %s\n", o.json);

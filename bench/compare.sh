@@ -1,0 +1,77 @@
+#!/usr/bin/env bash
+# hocad and gmsh side by side on the same models, orders and sizes.
+#
+# usage: bench/compare.sh [HOCAD] [GMSH] [MODELS_DIR]
+#   HOCAD  default build/hocad
+#   GMSH   default ../shared/peers/gmsh-5.0-dev (gmsh's own route: linear mesh,
+#          order elevation, -optimize_ho), falls back to Debian's gmsh
+# Cases: BENCH_CASES="model:order:size_factor ..." (size = bbox diagonal / factor;
+# 0: each tool's default size). Threads: BENCH_THREADS (default 1).
+# Prints one table row per case and tool; every number comes from the run.
+# SPDX-License-Identifier: GPL-2.0-or-later
+set -u
+here=$(cd "$(dirname "$0")/.." && pwd)
+hocad=$(readlink -f "${1:-$here/build/hocad}")
+gmsh=${2:-$here/../shared/peers/gmsh-5.0-dev}
+[ -x "$gmsh" ] || gmsh=$(command -v gmsh || true)
+models=$(readlink -f "${3:-$here/examples/models}")
+threads=${BENCH_THREADS:-1}
+cases=${BENCH_CASES:-"gmsh_t20_component8.step:3:0 gear_f360.step:3:0 pulley_at3_t10.step:3:0 D150_aircraft_fused.brep:3:0"}
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+
+jget() { # jget FILE STAGE KEY: a number from hocad's JSON report
+  grep -o "\"name\": \"$2\"[^}]*" "$1" | grep -o "\"$3\": [-0-9.e+a-z]*" | head -1 | cut -d' ' -f2
+}
+jtop() { grep -o "\"$2\": [-0-9.e+]*" "$1" | head -1 | cut -d' ' -f2; }
+
+printf "%-26s %-5s %2s %8s %8s %7s %7s %7s %7s %7s %5s %8s %7s %7s %7s\n" model tool p elements nodes \
+  linear_s elev_s meas_s opt_s write_s iters peakMB minq meanq tangled
+for c in $cases; do
+  IFS=: read -r m p f <<< "$c"
+  model=$models/$m
+  diag=$("$hocad" mesh "$model" --order 1 --no-output 2>/dev/null | sed -n 's/.*size \([0-9.e+-]*\) x \([0-9.e+-]*\) x \([0-9.e+-]*\).*/\1 \2 \3/p' |
+         awk '{print sqrt($1*$1+$2*$2+$3*$3)}')
+  size_args=() gsize_args=()
+  if [ "$f" != 0 ]; then
+    h=$(awk -v d="$diag" -v f="$f" 'BEGIN{print d/f}')
+    size_args=(--size "$h")
+    gsize_args=(-clmax "$h")
+  fi
+  # hocad
+  OMP_NUM_THREADS=$threads /usr/bin/time -f "%M" -o "$work/h.rss" "$hocad" mesh "$model" --order "$p" \
+    "${size_args[@]}" --threads "$threads" -q -o "$work/h.msh" --json "$work/h.json" 2>/dev/null
+  rc=$?
+  if [ -s "$work/h.json" ]; then
+    meas=$(awk -v a="$(jget "$work/h.json" linear measure_seconds)" -v b="$(jget "$work/h.json" high-order measure_seconds)" \
+               -v c="$(jget "$work/h.json" optimized measure_seconds)" 'BEGIN{print a+b+c}')
+    nodes=$(grep -m1 -A2 '^\$Nodes' "$work/h.msh" | sed -n 2p | cut -d' ' -f2)
+    printf "%-26s %-5s %2s %8s %8s %7.2f %7.2f %7.2f %7.2f %7.2f %5s %8.0f %7.4f %7.4f %7s\n" "$m" hocad "$p" \
+      "$(jget "$work/h.json" optimized elements)" "$nodes" "$(jget "$work/h.json" linear seconds)" \
+      "$(jget "$work/h.json" high-order seconds)" "$meas" "$(jget "$work/h.json" optimized seconds)" \
+      "$(jtop "$work/h.json" write_seconds)" "$(jget "$work/h.json" optimized iterations)" \
+      "$(awk '{print $1/1024}' "$work/h.rss")" "$(jget "$work/h.json" optimized min)" \
+      "$(jget "$work/h.json" optimized mean)" "$(jget "$work/h.json" optimized tangled)"
+  else
+    echo "$m hocad p=$p failed (exit $rc)"
+  fi
+  # gmsh: linear mesh, SetOrder, high-order optimiser, measured by hocad quality
+  if [ -n "$gmsh" ]; then
+    /usr/bin/time -f "%M" -o "$work/g.rss" "$gmsh" "$model" -2 -order "$p" -optimize_ho -nt "$threads" \
+      "${gsize_args[@]}" -o "$work/g.msh" > "$work/g.log" 2>&1
+    lin=$(grep -o 'Done meshing 2D (Wall [0-9.e-]*' "$work/g.log" | awk '{print $NF}')
+    l1=$(grep -o 'Done meshing 1D (Wall [0-9.e-]*' "$work/g.log" | awk '{print $NF}')
+    elev=$(grep -o "Done meshing order $p (Wall [0-9.e-]*" "$work/g.log" | awk '{print $NF}')
+    opt=$(grep -o 'Done optimizing mesh (Wall [0-9.e-]*' "$work/g.log" | tail -1 | awk '{print $NF}')
+    "$hocad" quality "$model" "$work/g.msh" --json "$work/g.json" -q 2>/dev/null
+    if [ -s "$work/g.json" ]; then
+      nodes=$(grep -m1 -A1 '^\$Nodes' "$work/g.msh" | sed -n 2p | cut -d' ' -f2)
+      printf "%-26s %-5s %2s %8s %8s %7.2f %7.2f %7s %7.2f %7s %5s %8.0f %7.4f %7.4f %7s\n" "$m" gmsh "$p" \
+        "$(jget "$work/g.json" input elements)" "$nodes" "$(awk -v a="${l1:-0}" -v b="${lin:-0}" 'BEGIN{print a+b}')" \
+        "${elev:-0}" - "${opt:-0}" - - "$(awk '{print $1/1024}' "$work/g.rss")" \
+        "$(jget "$work/g.json" input min)" "$(jget "$work/g.json" input mean)" "$(jget "$work/g.json" input tangled)"
+    else
+      echo "$m gmsh p=$p: no readable mesh ($(grep -m1 -i error "$work/g.log"))"
+    fi
+  fi
+done
