@@ -94,6 +94,10 @@ typedef struct opt {
   unsigned char *pvalid;/* [n_elems] not folded in the (u,v) plane */
   unsigned char *region;/* [n_elems] tangled or next to a tangled element: regularised, and
                            free to pass through sigma = 0 during the sweep */
+  unsigned char *was_region; /* [n_elems] region of the previous sweep */
+  unsigned char *dirty; /* [n_elems] a node moved since the last sweep_start */
+  double *delta_own;    /* [n_elems] regularisation from the element's own tangling */
+  double *fe, *qe;      /* [n_elems] objective part and q, as of the last sweep_start */
   double *hsize;        /* [n_nodes] local length: bound on one step's displacement */
   unsigned char *active;/* [n_nodes] */
   double min_gain;      /* per node: a step that lowers f by less puts the block to sleep */
@@ -126,7 +130,7 @@ static void opt_free(opt *o) {
   }
   void *p[] = {o->ndof, o->ne_start, o->ne_elem, o->ne_local, o->ns_start, o->ns_slot,
                o->nl_start, o->nl_line, o->dz, o->normal, o->delta, o->valid, o->pvalid,
-               o->region, o->hsize, o->active, o->moving, o->step, o->alpha, o->f0, o->fnew,
+               o->region, o->was_region, o->dirty, o->delta_own, o->fe, o->qe, o->hsize, o->active, o->moving, o->step, o->alpha, o->f0, o->fnew,
                o->slope, o->state, o->list, o->tpar, o->txyz, o->tdz, o->tslot_uv, o->tnormal};
   for (size_t i = 0; i < sizeof p / sizeof *p; ++i) free(p[i]);
 }
@@ -462,6 +466,12 @@ static hoc_status setup(opt *o, hoc_mesh *m, hoc_measure measure, int fix_curves
   HOC_ALLOC(o->valid, ne);
   HOC_ALLOC(o->pvalid, ne);
   HOC_ALLOC(o->region, ne);
+  HOC_ALLOC(o->was_region, ne);
+  HOC_ALLOC(o->dirty, ne);
+  HOC_ALLOC(o->delta_own, ne);
+  HOC_ALLOC(o->fe, ne);
+  HOC_ALLOC(o->qe, ne);
+  memset(o->dirty, 1, ne);
   HOC_ALLOC(o->hsize, nn);
   HOC_ALLOC(o->active, nn);
   HOC_ALLOC(o->moving, nn);
@@ -615,8 +625,9 @@ static void sigma_stats(const opt *o, const double *x, const double *n, double *
 }
 
 /* Residuals of element e's objective: the quadrature points, and in the
- * tangled region also the nodes (Definition 2 asks det > 0 there too).
- * r: [nq + np], J: [nq + np][np][3] or NULL. Returns the count and sets
+ * tangled region also the nodes and validation points (the tangle test
+ * asks det > 0 there too). r: [nq + np + nv], J: [nq + np + nv][np][3] or
+ * NULL. Returns the count and sets
  * *smin to the smallest sigma / |D phi|^2 over the quadrature points. */
 static int elem_residuals(const opt *o, size_t e, const double *x, const double *n, double *r,
                           double *J, double *smin) {
@@ -626,7 +637,7 @@ static int elem_residuals(const opt *o, size_t e, const double *x, const double 
   if (!o->region[e]) return nq;
   hoc_element_node_residuals(o->t, o->measure, x, n, o->delta[e], r + nq,
                              J ? J + 3 * (size_t)nq * (size_t)np : NULL);
-  return nq + np;
+  return nq + np + o->t->nv;
 }
 
 /* Per-element state at the start of a sweep: validity, parametric
@@ -635,14 +646,9 @@ static hoc_status sweep_start(opt *o, double *objective, double *min_q, size_t *
   hoc_mesh *m = o->m;
   size_t ne = m->n_elems;
   int np = o->np, nq = o->nq;
-  double *fe = hoc_calloc(ne, sizeof *fe), *qe = hoc_calloc(ne, sizeof *qe);
-  if (!fe || !qe) {
-    free(fe);
-    free(qe);
-    return HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
-  }
+  double *fe = o->fe, *qe = o->qe;
   int failed = 0;
-  memset(o->region, 0, ne); /* this sweep's region is found below */
+  /* elements whose nodes moved: q, validity, their own regularisation */
 #pragma omp parallel
   {
     double *x = malloc((6 * (size_t)np + (size_t)nq + 2 * (size_t)np) * sizeof *x);
@@ -650,33 +656,32 @@ static hoc_status sweep_start(opt *o, double *objective, double *min_q, size_t *
 #pragma omp atomic write
       failed = 1;
     }
-    double *n = x ? x + 3 * np : NULL, *r = x ? x + 6 * np : NULL, *uv = x ? r + nq : NULL;
+    double *n = x ? x + 3 * np : NULL, *uv = x ? x + 6 * np + nq : NULL;
 #pragma omp for schedule(static)
     for (size_t e = 0; e < ne; ++e) {
-      if (!x) continue;
+      if (!x || !o->dirty[e]) continue;
       gather(o, e, x, n);
       double eta;
       qe[e] = hoc_element_quality(o->t, o->measure, x, n, &eta, NULL);
       o->valid[e] = qe[e] > 0;
       o->pvalid[e] = (unsigned char)param_valid(o, e, uv);
-      o->delta[e] = 0;
+      o->delta_own[e] = 0;
       if (!o->valid[e]) {
         double smin, scale;
         sigma_stats(o, x, n, &smin, &scale);
         double eps = 1e-3 * scale;
-        o->delta[e] = smin < eps ? sqrt(eps * (eps - smin)) : 0;
-        if (!(o->delta[e] > 0)) o->delta[e] = eps;
+        o->delta_own[e] = smin < eps ? sqrt(eps * (eps - smin)) : 0;
+        if (!(o->delta_own[e] > 0)) o->delta_own[e] = eps;
       }
-      double f = 0;
-      int nr = elem_residuals(o, e, x, n, r, NULL, NULL);
-      for (int q = 0; q < nr; ++q) f += r[q] * r[q];
-      fe[e] = f;
     }
     free(x);
   }
   /* the tangled region: tangled elements and those sharing a node with one
    * take the largest regularisation around them (Escobar et al. regularise
    * the whole mesh with one delta; this keeps the rest of it exact) */
+  memcpy(o->was_region, o->region, ne);
+  memset(o->region, 0, ne);
+  for (size_t e = 0; e < ne; ++e) o->delta[e] = o->delta_own[e];
   for (size_t e = 0; e < ne && !failed; ++e) {
     if (o->valid[e]) continue;
     for (int i = 0; i < np; ++i) {
@@ -684,13 +689,14 @@ static hoc_status sweep_start(opt *o, double *objective, double *min_q, size_t *
       for (size_t a = o->ne_start[node]; a < o->ne_start[node + 1]; ++a) {
         size_t e2 = o->ne_elem[a];
         o->region[e2] = 1;
-        if (o->delta[e2] < o->delta[e]) o->delta[e2] = o->delta[e];
+        if (o->delta[e2] < o->delta_own[e]) o->delta[e2] = o->delta_own[e];
       }
     }
   }
+  /* objective parts that changed: moved, or in or out of the region */
 #pragma omp parallel
   {
-    double *x = malloc((7 * (size_t)np + (size_t)nq) * sizeof *x);
+    double *x = malloc((6 * (size_t)np + (size_t)nq + (size_t)np + (size_t)o->t->nv) * sizeof *x);
     if (!x) {
 #pragma omp atomic write
       failed = 1;
@@ -698,7 +704,7 @@ static hoc_status sweep_start(opt *o, double *objective, double *min_q, size_t *
     double *n = x ? x + 3 * np : NULL, *r = x ? x + 6 * np : NULL;
 #pragma omp for schedule(static)
     for (size_t e = 0; e < ne; ++e) {
-      if (!x || !o->region[e]) continue;
+      if (!x || !(o->dirty[e] || o->region[e] || o->was_region[e])) continue;
       gather(o, e, x, n);
       double f = 0;
       int nr = elem_residuals(o, e, x, n, r, NULL, NULL);
@@ -707,11 +713,8 @@ static hoc_status sweep_start(opt *o, double *objective, double *min_q, size_t *
     }
     free(x);
   }
-  if (failed) {
-    free(fe);
-    free(qe);
-    return HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
-  }
+  if (failed) return HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
+  memset(o->dirty, 0, ne);
   double f = 0, qmin = INFINITY;
   size_t nt = 0;
   for (size_t e = 0; e < ne; ++e) {
@@ -719,8 +722,6 @@ static hoc_status sweep_start(opt *o, double *objective, double *min_q, size_t *
     qmin = fmin(qmin, qe[e]);
     nt += qe[e] == 0.0;
   }
-  free(fe);
-  free(qe);
   *objective = f;
   *min_q = ne ? qmin : 0;
   *tangled = nt;
@@ -795,6 +796,7 @@ static hoc_status eval_trials(opt *o, const size_t *list, size_t n) {
 static void commit(opt *o, size_t k) {
   hoc_mesh *m = o->m;
   int np = o->np;
+  for (size_t a = o->ne_start[k]; a < o->ne_start[k + 1]; ++a) o->dirty[o->ne_elem[a]] = 1;
   for (size_t a = o->ne_start[k]; a < o->ne_start[k + 1]; ++a) {
     size_t e = o->ne_elem[a];
     int kk = o->ne_local[a];
@@ -971,7 +973,7 @@ static int line_monotone(const opt *o, size_t l) {
 
 /* Local objective of block b at its trial (nodes flagged moving); 0 if the
  * trial breaks a rule. */
-static int block_trial_flagged(const opt *o, size_t b, scratch *s, double *f) {
+static int block_trial_flagged(const opt *o, size_t b, scratch *s, double fmax, double *f) {
   const hoc_mesh *m = o->m;
   *f = 0;
   for (size_t a = o->B->bn_start[b]; a < o->B->bn_start[b + 1]; ++a) {
@@ -986,15 +988,24 @@ static int block_trial_flagged(const opt *o, size_t b, scratch *s, double *f) {
     if (o->pvalid[e] && !param_valid(o, e, s->uv)) return 0;
     double smin;
     int nr = elem_residuals(o, e, s->x, s->n, s->r, NULL, &smin);
-    if (o->valid[e] && (!(smin > 0) || hoc_element_nodes_tangled(o->t, s->x, s->n))) return 0;
+    if (o->valid[e] && !(smin > 0)) return 0;
     for (int q = 0; q < nr; ++q) *f += s->r[q] * s->r[q];
   }
-  return isfinite(*f);
+  if (!isfinite(*f) || !(*f <= fmax)) return 0;
+  /* a candidate: the dense part of the tangle test (nodes, validation
+   * lattice) for the elements that must stay valid */
+  for (size_t a = o->B->be_start[b]; a < o->B->be_start[b + 1]; ++a) {
+    size_t e = o->B->be_elem[a];
+    if (!o->valid[e]) continue;
+    gather(o, e, s->x, s->n);
+    if (hoc_element_nodes_tangled(o->t, s->x, s->n)) return 0;
+  }
+  return 1;
 }
 
-static int block_trial(opt *o, size_t b, scratch *s, double *f) {
+static int block_trial(opt *o, size_t b, scratch *s, double fmax, double *f) {
   set_moving(o, b, 1);
-  int ok = block_trial_flagged(o, b, s, f);
+  int ok = block_trial_flagged(o, b, s, fmax, f);
   set_moving(o, b, 0);
   return ok;
 }
@@ -1117,8 +1128,8 @@ static hoc_status do_color(opt *o, int color, scratch *scr, int nthreads, size_t
       size_t b = list[a];
       scratch *s = &scr[omp_get_thread_num()];
       double f;
-      int ok = block_trial(o, b, s, &f);
-      if (ok && f <= o->f0[b] + 1e-4 * o->alpha[b] * o->slope[b]) {
+      int ok = block_trial(o, b, s, o->f0[b] + 1e-4 * o->alpha[b] * o->slope[b], &f);
+      if (ok) {
         for (size_t c = o->B->bn_start[b]; c < o->B->bn_start[b + 1]; ++c) commit(o, o->B->bn_node[c]);
         for (size_t j = o->B->carry_start[b]; j < o->B->carry_start[b + 1]; ++j) commit(o, o->B->carry_node[j]);
         o->fnew[b] = f;
@@ -1174,10 +1185,11 @@ static hoc_status scratch_alloc(const opt *o, int nthreads, scratch **out) {
   for (int i = 0; i < nthreads; ++i) {
     s[i].x = hoc_calloc(3 * np, sizeof(double));
     s[i].n = hoc_calloc(3 * np, sizeof(double));
-    s[i].r = hoc_calloc(nq + np, sizeof(double));
-    s[i].J = hoc_calloc(3 * (nq + np) * np, sizeof(double));
+    size_t nr = nq + np + (size_t)o->t->nv;
+    s[i].r = hoc_calloc(nr, sizeof(double));
+    s[i].J = hoc_calloc(3 * nr * np, sizeof(double));
     s[i].uv = hoc_calloc(2 * np, sizeof(double));
-    s[i].Jz = hoc_calloc((nq + np) * nd, sizeof(double));
+    s[i].Jz = hoc_calloc(nr * nd, sizeof(double));
     s[i].H = hoc_calloc(nd * nd, sizeof(double));
     s[i].g = hoc_calloc(nd, sizeof(double));
     s[i].L = hoc_calloc(nd * nd, sizeof(double));

@@ -193,13 +193,15 @@ double hoc_element_residuals_node(const hoc_quality_tables *t, hoc_measure measu
 double hoc_element_node_residuals(const hoc_quality_tables *t, hoc_measure measure,
                                   const double *x, const double *n, double delta, double *r,
                                   double *J) {
-  int np = t->np;
-  double smin = INFINITY, sw = sqrt(1.0 / np);
-  for (int j = 0; j < np; ++j) {
-    double a1[3], a2[3], sig, g1[3], g2[3];
-    const double *G = t->Gn + 2 * (size_t)j * np;
+  int np = t->np, nv = t->nv;
+  double smin = INFINITY, sw = sqrt(1.0 / (np + nv));
+  for (int j = 0; j < np + nv; ++j) {
+    double a1[3], a2[3], sig, g1[3], g2[3], nj[3];
+    const double *G = j < np ? t->Gn + 2 * (size_t)j * np : t->Gv + 2 * (size_t)(j - np) * np;
     jacobian_at(np, x, G, a1, a2);
-    double e = hoc_distortion_point(measure, a1, a2, n + 3 * j, delta, &sig, J ? g1 : NULL,
+    if (j < np) memcpy(nj, n + 3 * j, sizeof nj);
+    else normal_at(np, n, t->Nv + (size_t)(j - np) * np, nj);
+    double e = hoc_distortion_point(measure, a1, a2, nj, delta, &sig, J ? g1 : NULL,
                                     J ? g2 : NULL);
     double rel = sig / (dot(a1, a1) + dot(a2, a2));
     if (!(rel >= smin)) smin = rel;

@@ -97,12 +97,12 @@ double hoc_element_residuals_node(const hoc_quality_tables *t, hoc_measure measu
                                   const double *x, const double *n, double delta, int node,
                                   double *r, double *Jk);
 
-/** Residuals at the element's nodes, r_j = sqrt(1/np) (eta(node j) - 1),
- *  for untangling: Definition 2 also asks det > 0 at the nodes, which the
- *  quadrature points alone do not see.
- *  @param[out] r  [np]
- *  @param[out] J  [np][np][3] d r_j / d x_i, or NULL
- *  @return smallest sigma / |D phi|^2 over the nodes */
+/** Residuals at the element's nodes and validation points,
+ *  r_j = sqrt(1/(np+nv)) (eta(point j) - 1), for untangling: the tangle test
+ *  also asks det > 0 there, which the quadrature points alone do not see.
+ *  @param[out] r  [np + nv]
+ *  @param[out] J  [np + nv][np][3] d r_j / d x_i, or NULL
+ *  @return smallest sigma / |D phi|^2 over those points */
 double hoc_element_node_residuals(const hoc_quality_tables *t, hoc_measure measure,
                                   const double *x, const double *n, double delta, double *r,
                                   double *J);
