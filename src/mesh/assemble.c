@@ -374,8 +374,22 @@ static hoc_status slot_params(hoc_mesh *m, const hoc_mesh_source *src, double to
     size_t i = m->slot_node[s];
     if (m->dim[i] == HOC_ON_FACE) continue;
     int f = m->slot_face[s];
+    const hoc_cad_face *face = &model->faces[f];
     double *p = m->slot_uv + 2 * s, x[3], d = INFINITY;
-    if (isfinite(p[0]) && isfinite(p[1])) {
+    /* a pcurve may give the other copy of a periodic surface's seam while
+     * the face's own domain does not cross it (a piece of a periodic
+     * surface): bring it back into the face's bounds */
+    int outside = 0;
+    for (int k = 0; k < 2 && isfinite(p[0]) && isfinite(p[1]); ++k) {
+      double margin = 1e-6 * (face->hi[k] - face->lo[k]);
+      if (!(face->period[k] > 0) && (p[k] < face->lo[k] - margin || p[k] > face->hi[k] + margin)) {
+        p[k] = p[k] < face->lo[k] ? face->lo[k] : face->hi[k];
+        outside = 1;
+      }
+    }
+    if (outside) {
+      HOC_TRY_GOTO(hoc_cad_face_invert(model, f, m->xyz + 3 * i, p, &d), done);
+    } else if (isfinite(p[0]) && isfinite(p[1])) {
       HOC_TRY_GOTO(hoc_cad_face_eval(model, f, 1, p, x, NULL, NULL), done);
       d = dist3(x, m->xyz + 3 * i);
     }
