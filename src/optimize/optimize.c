@@ -92,6 +92,9 @@ typedef struct opt {
   double *delta;        /* [n_elems] regularisation of the sweep */
   unsigned char *valid; /* [n_elems] not tangled (Definition 2) */
   unsigned char *pvalid;/* [n_elems] not folded in the (u,v) plane */
+  unsigned char *on_boundary; /* [n_elems] has a node on a CAD curve or vertex: kept unfolded in
+                           (u,v) so no node leaves the trimmed face (inside, 3D validity of
+                           the neighbours is the barrier) */
   unsigned char *region;/* [n_elems] tangled or next to a tangled element: regularised, and
                            free to pass through sigma = 0 during the sweep */
   unsigned char *was_region; /* [n_elems] region of the previous sweep */
@@ -101,6 +104,7 @@ typedef struct opt {
   double *hsize;        /* [n_nodes] local length: bound on one step's displacement */
   unsigned char *active;/* [n_nodes] */
   double min_gain;      /* per node: a step that lowers f by less puts the block to sleep */
+  double eps;           /* regularisation scale of tangled elements (relative to their size) */
   unsigned char *moving;/* [n_nodes] use the trial state of this node */
   /* trial state */
   double *step;         /* [unknowns] Gauss-Newton direction of each block */
@@ -129,7 +133,7 @@ static void opt_free(opt *o) {
     for (size_t i = 0; i < sizeof q / sizeof *q; ++i) free(q[i]);
   }
   void *p[] = {o->ndof, o->ne_start, o->ne_elem, o->ne_local, o->ns_start, o->ns_slot,
-               o->nl_start, o->nl_line, o->dz, o->normal, o->delta, o->valid, o->pvalid,
+               o->nl_start, o->nl_line, o->dz, o->normal, o->delta, o->valid, o->pvalid, o->on_boundary,
                o->region, o->was_region, o->dirty, o->delta_own, o->fe, o->qe, o->hsize, o->active, o->moving, o->step, o->alpha, o->f0, o->fnew,
                o->slope, o->state, o->list, o->tpar, o->txyz, o->tdz, o->tslot_uv, o->tnormal};
   for (size_t i = 0; i < sizeof p / sizeof *p; ++i) free(p[i]);
@@ -418,6 +422,7 @@ static hoc_status setup(opt *o, hoc_mesh *m, hoc_measure measure, int fix_curves
   o->m = m;
   o->model = m->model;
   o->measure = measure;
+  o->eps = 1e-3;
   HOC_TRY(hoc_quality_tables_get(m->order, m->nodeset, &o->t));
   o->np = o->t->np;
   o->nq = o->t->nq;
@@ -465,6 +470,9 @@ static hoc_status setup(opt *o, hoc_mesh *m, hoc_measure measure, int fix_curves
   HOC_ALLOC(o->delta, ne);
   HOC_ALLOC(o->valid, ne);
   HOC_ALLOC(o->pvalid, ne);
+  HOC_ALLOC(o->on_boundary, ne);
+  for (size_t e = 0; e < ne; ++e)
+    for (size_t k = 0; k < np; ++k) o->on_boundary[e] |= m->dim[m->conn[e * np + k]] != HOC_ON_FACE;
   HOC_ALLOC(o->region, ne);
   HOC_ALLOC(o->was_region, ne);
   HOC_ALLOC(o->dirty, ne);
@@ -669,7 +677,7 @@ static hoc_status sweep_start(opt *o, double *objective, double *min_q, size_t *
       if (!o->valid[e]) {
         double smin, scale;
         sigma_stats(o, x, n, &smin, &scale);
-        double eps = 1e-3 * scale;
+        double eps = o->eps * scale;
         o->delta_own[e] = smin < eps ? sqrt(eps * (eps - smin)) : 0;
         if (!(o->delta_own[e] > 0)) o->delta_own[e] = eps;
       }
@@ -971,6 +979,11 @@ static int line_monotone(const opt *o, size_t l) {
   return 1;
 }
 
+/* While untangling stalls (a raised regularisation), the valid neighbours
+ * of tangled elements may pass through sigma = 0 for a while: some folds
+ * only open by moving their neighbourhood through an invalid state. */
+static int relaxed(const opt *o, size_t e) { return o->region[e] && o->eps > 2e-3; }
+
 /* Local objective of block b at its trial (nodes flagged moving); 0 if the
  * trial breaks a rule. */
 static int block_trial_flagged(const opt *o, size_t b, scratch *s, double fmax, double *f) {
@@ -985,10 +998,10 @@ static int block_trial_flagged(const opt *o, size_t b, scratch *s, double fmax, 
   for (size_t a = o->B->be_start[b]; a < o->B->be_start[b + 1]; ++a) {
     size_t e = o->B->be_elem[a];
     gather(o, e, s->x, s->n);
-    if (o->pvalid[e] && !param_valid(o, e, s->uv)) return 0;
+    if (o->pvalid[e] && o->on_boundary[e] && !param_valid(o, e, s->uv)) return 0;
     double smin;
     int nr = elem_residuals(o, e, s->x, s->n, s->r, NULL, &smin);
-    if (o->valid[e] && !(smin > 0)) return 0;
+    if (o->valid[e] && !relaxed(o, e) && !(smin > 0)) return 0;
     for (int q = 0; q < nr; ++q) *f += s->r[q] * s->r[q];
   }
   if (!isfinite(*f) || !(*f <= fmax)) return 0;
@@ -996,7 +1009,7 @@ static int block_trial_flagged(const opt *o, size_t b, scratch *s, double fmax, 
    * lattice) for the elements that must stay valid */
   for (size_t a = o->B->be_start[b]; a < o->B->be_start[b + 1]; ++a) {
     size_t e = o->B->be_elem[a];
-    if (!o->valid[e]) continue;
+    if (!o->valid[e] || relaxed(o, e)) continue;
     gather(o, e, s->x, s->n);
     if (hoc_element_nodes_tangled(o->t, s->x, s->n)) return 0;
   }
@@ -1008,6 +1021,15 @@ static int block_trial(opt *o, size_t b, scratch *s, double fmax, double *f) {
   int ok = block_trial_flagged(o, b, s, fmax, f);
   set_moving(o, b, 0);
   return ok;
+}
+
+/* A trial parameter is acceptable inside [lo, hi], or outside but closer to
+ * it than the current value (a node outside its face's range, e.g. read from
+ * a file, may come back). */
+static int param_ok(double cur, double v, double lo, double hi) {
+  if (v >= lo && v <= hi) return 1;
+  double dv = v < lo ? lo - v : v - hi, dc = cur < lo ? lo - cur : cur > hi ? cur - hi : 0;
+  return dv < dc;
 }
 
 /* Trial parameters of block b at step length alpha[b]: the block's nodes
@@ -1025,14 +1047,14 @@ static int set_trial_params(opt *o, size_t b) {
       for (int d = 0; d < 2; ++d) {
         double v = m->param[2 * k + d] + al * st[off + d];
         o->tpar[2 * k + d] = v;
-        if (!(f->period[d] > 0) && (v < f->lo[d] || v > f->hi[d])) inside = 0;
+        if (!(f->period[d] > 0) && !param_ok(m->param[2 * k + d], v, f->lo[d], f->hi[d])) inside = 0;
       }
     } else {
       const hoc_cad_curve *c = &o->model->curves[m->entity[k]];
       double v = m->param[2 * k] + al * st[off];
       o->tpar[2 * k] = v;
       o->tpar[2 * k + 1] = 0;
-      if (!(c->period > 0) && (v < c->lo || v > c->hi)) inside = 0;
+      if (!(c->period > 0) && !param_ok(m->param[2 * k], v, c->lo, c->hi)) inside = 0;
     }
   }
   for (size_t j = o->B->carry_start[b]; j < o->B->carry_start[b + 1]; ++j) {
@@ -1041,7 +1063,7 @@ static int set_trial_params(opt *o, size_t b) {
     for (int d = 0; d < 2; ++d) {
       double v = m->param[2 * c + d] + al * o->B->carry_w[j] * st[d];
       o->tpar[2 * c + d] = v;
-      if (!(f->period[d] > 0) && (v < f->lo[d] || v > f->hi[d])) inside = 0;
+      if (!(f->period[d] > 0) && !param_ok(m->param[2 * c + d], v, f->lo[d], f->hi[d])) inside = 0;
     }
   }
   return inside;
@@ -1252,6 +1274,7 @@ hoc_status hoc_mesh_optimize(hoc_mesh *mesh, const hoc_optimize_options *options
   HOC_TRY_GOTO(sweep_start(&ctx, &f, &qmin, &tangled), done);
   res.objective_initial = f;
   res.tangled_initial = tangled;
+  int stalled = 0;
   for (int it = 1; it <= o.max_iterations; ++it) {
     size_t moved = 0;
     /* nodes near tangled elements never sleep */
@@ -1274,8 +1297,28 @@ hoc_status hoc_mesh_optimize(hoc_mesh *mesh, const hoc_optimize_options *options
       }
     }
     ctx.B = &ctx.fam[0];
+    size_t tangled_before = tangled;
     HOC_TRY_GOTO(sweep_start(&ctx, &f, &qmin, &tangled), done);
     res.iterations = it;
+    /* untangling that stalls: a smoother regularised landscape (larger
+     * delta) for a while; back to the small one as soon as it moves on */
+    if (tangled && tangled >= tangled_before) {
+      /* cycle 1e-3 -> 1e-2 -> 1e-1 -> 1e-3: a large delta smooths the
+       * landscape, a small one pushes the last folds open */
+      if (++stalled >= 3) {
+        ctx.eps = ctx.eps < 0.05 ? ctx.eps * 10 : 1e-3;
+        stalled = 0;
+        memset(ctx.dirty, 1, mesh->n_elems); /* every delta changes */
+        HOC_TRY_GOTO(sweep_start(&ctx, &f, &qmin, &tangled), done);
+      }
+    } else if (tangled < tangled_before && ctx.eps > 1e-3) {
+      ctx.eps = 1e-3;
+      stalled = 0;
+      memset(ctx.dirty, 1, mesh->n_elems);
+      HOC_TRY_GOTO(sweep_start(&ctx, &f, &qmin, &tangled), done);
+    } else {
+      stalled = 0;
+    }
     if (o.progress) {
       hoc_optimize_iteration info = {it, f, qmin, tangled, moved, now() - t0};
       if (o.progress(o.progress_user, &info)) {
@@ -1364,10 +1407,13 @@ hoc_status hoc_mesh_check_gradient(hoc_mesh *mesh, hoc_measure measure, int fix_
       double speed = sqrt(dz[0] * dz[0] + dz[1] * dz[1] + dz[2] * dz[2]);
       if (!(speed > 0)) continue;
       double h = 1e-5 * ctx.hsize[k] / speed, gd = scr->g[d];
-      double fp, fm;
+      /* fourth-order central difference */
+      double fp, fm, fp2, fm2;
       HOC_TRY_GOTO(block_f_at(&ctx, b, d, h, scr, &fp), done);
       HOC_TRY_GOTO(block_f_at(&ctx, b, d, -h, scr, &fm), done);
-      double fd = (fp - fm) / (2 * h);
+      HOC_TRY_GOTO(block_f_at(&ctx, b, d, 2 * h, scr, &fp2), done);
+      HOC_TRY_GOTO(block_f_at(&ctx, b, d, -2 * h, scr, &fm2), done);
+      double fd = (8 * (fp - fm) - (fp2 - fm2)) / (12 * h);
       if (!isfinite(fd)) continue;
       /* per unit length, to compare unknowns of different nodes */
       worst = fmax(worst, fabs(fd - gd) / speed);
