@@ -134,6 +134,12 @@ hoc_status hoc_mesh_generate_linear(hoc_model *model, const hoc_linear_options *
 hoc_status hoc_mesh_elevate(const hoc_mesh *mesh, int order, hoc_nodeset nodeset,
                             hoc_mesh **out);
 
+/** The same elements with the nodes of another reference distribution
+ *  (e.g. Fekete to equispaced, what MSH and VTU files mean): each element's
+ *  parametric map evaluated at the new reference nodes, mapped onto the CAD.
+ *  @param[out] out  new mesh of the same order */
+hoc_status hoc_mesh_convert(const hoc_mesh *mesh, hoc_nodeset nodeset, hoc_mesh **out);
+
 /** Read a gmsh MSH 4.1 mesh (ASCII or binary) of the model's surfaces,
  *  e.g. one written by gmsh or by hoc_mesh_write_msh. Triangles of any order
  *  up to 10 are read; other elements are ignored. Nodes without parametric
@@ -163,8 +169,10 @@ size_t hoc_mesh_num_elements(const hoc_mesh *mesh);
 size_t hoc_mesh_num_nodes(const hoc_mesh *mesh);
 int hoc_mesh_order(const hoc_mesh *mesh);
 hoc_nodeset hoc_mesh_nodeset(const hoc_mesh *mesh);
-/** Number of faces the linear mesher could not mesh. */
+/** Number of faces the linear mesher could not mesh, and the CAD tag of the
+ *  i-th of them (-1 if out of range). */
 int hoc_mesh_num_failed_faces(const hoc_mesh *mesh);
+int hoc_mesh_failed_face_tag(const hoc_mesh *mesh, int i);
 /** Largest distance from a node to its CAD entity, recomputed from the
  *  nodes' parametric coordinates (a self-check of the mesh). */
 hoc_status hoc_mesh_max_cad_distance(const hoc_mesh *mesh, double *distance);

@@ -306,7 +306,7 @@ typedef struct stage {
 } stage;
 
 typedef struct report {
-  stage stages[4];
+  stage stages[5];
   int n;
   double write_seconds; /* writing the mesh files */
   double model_seconds; /* reading the CAD model */
@@ -555,7 +555,7 @@ static int cmd_mesh(int argc, char **argv) {
 
   int code = EXIT_OK;
   hoc_model *model = NULL;
-  hoc_mesh *lin = NULL, *ho = NULL;
+  hoc_mesh *lin = NULL, *ho = NULL, *written = NULL;
   double *q = NULL;
   report r = {0};
   progress(&o, "reading %s", o.model);
@@ -598,9 +598,13 @@ static int cmd_mesh(int argc, char **argv) {
     goto done;
   }
   double t_lin = now() - t0;
-  if (hoc_mesh_num_failed_faces(lin))
-    fprintf(stderr, "%s: warning: %d face(s) could not be meshed; the rest is processed\n",
-            program, hoc_mesh_num_failed_faces(lin));
+  if (hoc_mesh_num_failed_faces(lin)) {
+    int nfail = hoc_mesh_num_failed_faces(lin);
+    fprintf(stderr, "%s: warning: %d face(s) could not be meshed (the rest is processed): faces",
+            program, nfail);
+    for (int i = 0; i < nfail && i < 30; ++i) fprintf(stderr, " %d", hoc_mesh_failed_face_tag(lin, i));
+    fprintf(stderr, "%s\n", nfail > 30 ? " ..." : "");
+  }
   if ((code = measure_stage(&o, &r, "linear", lin, t_lin, NULL))) goto done;
   const hoc_mesh *final = lin;
   if (o.order > 1) {
@@ -616,6 +620,17 @@ static int cmd_mesh(int argc, char **argv) {
   }
   if (o.optimize && o.order > 1) {
     if ((code = optimize_stage(&o, &r, ho))) goto done;
+  }
+  /* files hold equispaced nodes: measure what is written */
+  if (o.nodes != HOC_NODES_EQUISPACED && o.order >= 3 && (out || o.vtu)) {
+    t0 = now();
+    st = hoc_mesh_convert(final, HOC_NODES_EQUISPACED, &written);
+    if (st != HOC_OK) {
+      code = fail(st, 0);
+      goto done;
+    }
+    if ((code = measure_stage(&o, &r, "written", written, now() - t0, NULL))) goto done;
+    final = written;
   }
   if (!o.quiet) print_table(&r);
 
@@ -643,6 +658,7 @@ static int cmd_mesh(int argc, char **argv) {
   if (!code && hoc_mesh_num_failed_faces(lin)) code = EXIT_PARTIAL;
 done:
   free(q);
+  hoc_mesh_destroy(&written);
   hoc_mesh_destroy(&ho);
   hoc_mesh_destroy(&lin);
   hoc_model_destroy(&model);

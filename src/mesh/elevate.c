@@ -276,6 +276,10 @@ hoc_status hoc_mesh_elevate(const hoc_mesh *in, int order, hoc_nodeset set, hoc_
   return reinterpolate(in, order, set, out);
 }
 
+hoc_status hoc_mesh_convert(const hoc_mesh *in, hoc_nodeset set, hoc_mesh **out) {
+  return hoc_mesh_convert_nodeset(in, set, out);
+}
+
 hoc_status hoc_mesh_convert_nodeset(const hoc_mesh *in, hoc_nodeset set, hoc_mesh **out) {
   HOC_CHECK(out, HOC_ERR_ARGUMENT, "mesh output is NULL");
   *out = NULL;

@@ -70,6 +70,10 @@ hoc_nodeset hoc_mesh_nodeset(const hoc_mesh *mesh) {
   return mesh ? mesh->nodeset : HOC_NODES_EQUISPACED;
 }
 int hoc_mesh_num_failed_faces(const hoc_mesh *mesh) { return mesh ? mesh->n_failed_faces : 0; }
+int hoc_mesh_failed_face_tag(const hoc_mesh *mesh, int i) {
+  return mesh && i >= 0 && i < mesh->n_failed_faces ? mesh->model->faces[mesh->failed_faces[i]].tag
+                                                     : -1;
+}
 int hoc_mesh_element_face_tag(const hoc_mesh *mesh, size_t e) {
   return mesh && e < mesh->n_elems ? mesh->model->faces[mesh->elem_face[e]].tag : -1;
 }
