@@ -16,3 +16,12 @@ echo "== sanitizer build (ASan + UBSan)"
 cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DHOCAD_SANITIZE=ON >/dev/null
 cmake --build build-asan -j "$jobs"
 (cd build-asan && ASAN_OPTIONS=detect_leaks=1 ctest --output-on-failure -j "$jobs")
+
+echo "== fuzzing the MSH reader (60 s, libFuzzer, from tests/fuzz/corpus)"
+CC=clang cmake -S . -B build-fuzz -DHOCAD_FUZZ=ON -DHOCAD_TESTS=OFF >/dev/null
+cmake --build build-fuzz --target fuzz_msh -j "$jobs"
+corpus=$(mktemp -d)
+cp tests/fuzz/corpus/* "$corpus"/
+./build-fuzz/tests/fuzz/fuzz_msh -max_total_time=60 -rss_limit_mb=2048 -print_final_stats=1 "$corpus" 2>&1 | tail -3
+rm -rf "$corpus"
+echo "fuzzing: no crash"
