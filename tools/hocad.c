@@ -485,12 +485,15 @@ static int optimize_stage(const options *o, report *r, hoc_mesh *mesh) {
 }
 
 /* Where tangled elements remain: say which (on stderr). */
-static void report_tangled(const hoc_mesh *mesh, const double *q) {
+static void report_tangled(const hoc_mesh *mesh, const double *q, int optimized) {
   size_t ne = hoc_mesh_num_elements(mesh), shown = 0, total = 0;
   for (size_t e = 0; e < ne; ++e) total += q[e] == 0.0;
   if (!total) return;
-  fprintf(stderr, "%s: warning: %zu element(s) could not be untangled with this linear mesh "
-                  "(try a smaller --size or a larger --curvature):", program, total);
+  if (optimized)
+    fprintf(stderr, "%s: warning: %zu element(s) could not be untangled with this linear mesh "
+                    "(try a smaller --size or a larger --curvature):", program, total);
+  else
+    fprintf(stderr, "%s: warning: %zu tangled element(s) (not optimized):", program, total);
   for (size_t e = 0; e < ne && shown < 20; ++e)
     if (q[e] == 0.0) {
       fprintf(stderr, " %zu (face %d)", e + 1, hoc_mesh_element_face_tag(mesh, e));
@@ -774,7 +777,7 @@ static int cmd_optimize(int argc, char **argv) {
   }
   if ((code = write_outputs(&o, mesh, q, o.out))) goto done;
   if (o.json && (code = write_json(o.json, &o, &r, "optimize"))) goto done;
-  report_tangled(mesh, q);
+  report_tangled(mesh, q, 1);
   if (r.stages[r.n - 1].stats.tangled) code = EXIT_TANGLED;
 done:
   free(q);

@@ -12,6 +12,7 @@
 #include "cad/gmsh_util.h"
 
 #include <gmshc.h>
+#include <omp.h>
 
 #include <ctype.h>
 #include <errno.h>
@@ -41,7 +42,10 @@ hoc_status hoc_gmsh_error(const char *what) {
 hoc_status hoc_gmsh_start(void) {
   if (gmsh_initialized) return HOC_OK;
   int ierr = 0;
+  /* gmsh sets OpenMP to its own General.NumThreads (1): keep the caller's */
+  int threads = omp_get_max_threads();
   gmshInitialize(0, NULL, 0, &ierr);
+  omp_set_num_threads(threads);
   HOC_CHECK(!ierr, HOC_ERR_CAD, "gmsh could not be initialised");
   gmshOptionSetNumber("General.Terminal", 0, &ierr);
   gmshOptionSetNumber("General.Verbosity", 1, &ierr);
@@ -408,7 +412,9 @@ hoc_status hoc_cad_open_gmsh(const char *path, hoc_model **model) {
   gmshClear(&ierr);
   hoc_quiet q;
   hoc_quiet_begin(&q);
+  int threads = omp_get_max_threads();
   gmshOpen(path, &ierr);
+  omp_set_num_threads(threads);
   char kernel_msg[256];
   hoc_quiet_end(&q, kernel_msg, sizeof kernel_msg);
   if (ierr) {

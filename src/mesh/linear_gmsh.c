@@ -6,6 +6,7 @@
 #include "mesh/mesh.h"
 
 #include <gmshc.h>
+#include <omp.h>
 
 #include <math.h>
 #include <stdlib.h>
@@ -170,7 +171,12 @@ hoc_status hoc_mesh_generate_linear_gmsh(hoc_model *model, const hoc_linear_opti
     return HOC_ERROR(HOC_ERR_INTERRUPTED, "interrupted");
   hoc_quiet q;
   hoc_quiet_begin(&q);
+  /* gmsh meshes faces in parallel when OpenMP allows, and then not always
+   * the same mesh: one thread, so a model always gets the same mesh */
+  int threads = omp_get_max_threads();
+  omp_set_num_threads(1);
   gmshModelMeshGenerate(2, &ierr);
+  omp_set_num_threads(threads);
   char kernel_msg[256];
   hoc_quiet_end(&q, kernel_msg, sizeof kernel_msg);
   if (ierr) {
