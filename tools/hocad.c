@@ -656,7 +656,7 @@ static int cmd_mesh(int argc, char **argv) {
     if ((code = write_json(o.json, &o, &r, "mesh"))) goto done;
     if (!o.quiet) printf("wrote %s\n", o.json);
   }
-  report_tangled(final, q);
+  report_tangled(final, q, o.optimize && o.order > 1);
   if (r.stages[r.n - 1].stats.tangled) code = EXIT_TANGLED;
   if (!code && hoc_mesh_num_failed_faces(lin)) code = EXIT_PARTIAL;
 done:
