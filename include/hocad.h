@@ -223,8 +223,10 @@ typedef struct hoc_optimize_options {
   int fix_curves;       /**< 1: nodes on CAD curves stay where they are (the seed's choice) */
   int max_iterations;   /**< sweeps (0: 100) */
   double tolerance;     /**< a node whose move lowers f by less than tolerance * f / (free
-                             nodes) goes to sleep (and wakes no neighbour); the optimisation
-                             ends when every node sleeps (0: 0.1) */
+                             nodes) goes to sleep; the optimisation ends when every node
+                             sleeps, or when, with no tangled element, ten sweeps lowered f
+                             by less than 5% and raised the smallest q by less than 0.005
+                             (0: 0.1) */
   hoc_optimize_progress_fn progress;
   void *progress_user;
 } hoc_optimize_options;
@@ -233,7 +235,7 @@ void hoc_optimize_options_default(hoc_optimize_options *options);
 
 typedef struct hoc_optimize_result {
   int iterations;
-  int converged;        /**< every node asleep (tolerance met) and no tangled element */
+  int converged;        /**< a stopping rule of `tolerance` met, no tangled element */
   double objective_initial, objective_final;
   size_t tangled_initial, tangled_final;
   size_t free_nodes;    /**< nodes the optimiser could move */

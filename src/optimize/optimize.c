@@ -105,6 +105,7 @@ typedef struct opt {
   unsigned char *active;/* [n_nodes] */
   double min_gain;      /* per node: a step that lowers f by less puts the block to sleep */
   double eps;           /* regularisation scale of tangled elements (relative to their size) */
+  double wake_factor;   /* a move must gain this many times min_gain to wake its neighbours */
   unsigned char *moving;/* [n_nodes] use the trial state of this node */
   /* trial state */
   double *step;         /* [unknowns] Gauss-Newton direction of each block */
@@ -861,6 +862,77 @@ static void set_moving(opt *o, size_t b, unsigned char v) {
   for (size_t j = o->B->carry_start[b]; j < o->B->carry_start[b + 1]; ++j) o->moving[o->B->carry_node[j]] = v;
 }
 
+/* Screening: every node's single-node Gauss-Newton decrease estimate
+ * 0.5 g^T H^-1 g from one evaluation per element (instead of one per block
+ * through each element); nodes whose estimate is below the gain threshold
+ * (and not near a tangle) start asleep. Element contributions are stored
+ * and summed per node in element order, so the result does not depend on
+ * the thread count. */
+static hoc_status screen(opt *o) {
+  hoc_mesh *m = o->m;
+  size_t ne = m->n_elems, np = (size_t)o->np;
+  double *contrib = hoc_calloc(5 * ne * np + 1, sizeof *contrib); /* [ne][np][g0 g1 h00 h01 h11] */
+  HOC_CHECK(contrib, HOC_ERR_MEMORY, "out of memory");
+  int nr_max = o->nq + o->np + o->t->nv, failed = 0;
+#pragma omp parallel
+  {
+    double *x = malloc((6 * np + (size_t)nr_max + 3 * (size_t)nr_max * np) * sizeof *x);
+    if (!x) {
+#pragma omp atomic write
+      failed = 1;
+    }
+    double *n = x ? x + 3 * np : NULL, *r = x ? x + 6 * np : NULL, *J = r ? r + nr_max : NULL;
+#pragma omp for schedule(static)
+    for (size_t e = 0; e < ne; ++e) {
+      if (!x) continue;
+      gather(o, e, x, n);
+      int nr = elem_residuals(o, e, x, n, r, J, NULL);
+      const size_t *cn = m->conn + e * np;
+      for (size_t i = 0; i < np; ++i) {
+        const double *dz = o->dz + 6 * cn[i];
+        double *c = contrib + 5 * (e * np + i);
+        for (int q = 0; q < nr; ++q) {
+          const double *j = J + 3 * ((size_t)q * np + i);
+          double z0 = j[0] * dz[0] + j[1] * dz[1] + j[2] * dz[2];
+          double z1 = j[0] * dz[3] + j[1] * dz[4] + j[2] * dz[5];
+          c[0] += 2 * r[q] * z0;
+          c[1] += 2 * r[q] * z1;
+          c[2] += 2 * z0 * z0;
+          c[3] += 2 * z0 * z1;
+          c[4] += 2 * z1 * z1;
+        }
+      }
+    }
+    free(x);
+  }
+  if (failed) {
+    free(contrib);
+    return HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
+  }
+  for (size_t k = 0; k < m->n_nodes; ++k) {
+    if (!o->ndof[k]) continue;
+    double c[5] = {0, 0, 0, 0, 0};
+    int near = 0;
+    for (size_t a = o->ne_start[k]; a < o->ne_start[k + 1]; ++a) {
+      size_t e = o->ne_elem[a];
+      const double *ce = contrib + 5 * (e * np + (size_t)o->ne_local[a]);
+      for (int d = 0; d < 5; ++d) c[d] += ce[d];
+      near |= o->region[e] || !o->valid[e];
+    }
+    double gain;
+    if (o->ndof[k] == 2) {
+      double det = c[2] * c[4] - c[3] * c[3];
+      gain = det > 0 ? 0.5 * (c[4] * c[0] * c[0] - 2 * c[3] * c[0] * c[1] + c[2] * c[1] * c[1]) / det
+                     : INFINITY;
+    } else {
+      gain = c[2] > 0 ? 0.5 * c[0] * c[0] / c[2] : INFINITY;
+    }
+    o->active[k] = near || !(gain < o->min_gain);
+  }
+  free(contrib);
+  return HOC_OK;
+}
+
 /* Local objective of block b at the current state: f, gradient g[nd] and
  * Gauss-Newton matrix H[nd][nd] in its unknowns. */
 static void block_model(const opt *o, size_t b, scratch *s, double *f, double *g, double *H) {
@@ -1170,7 +1242,10 @@ static hoc_status do_color(opt *o, int color, scratch *scr, int nthreads, size_t
       o->state[b] = 0;
       size_t nodes = o->B->bn_start[b + 1] - o->B->bn_start[b];
       *moved += nodes;
-      if (o->f0[b] - o->fnew[b] < o->min_gain * (double)nodes && !near_tangled(o, b)) continue;
+      /* only a significant move wakes the neighbourhood (small ones would
+       * spread waves of smaller ones through the whole mesh) */
+      if (o->f0[b] - o->fnew[b] < o->wake_factor * o->min_gain * (double)nodes && !near_tangled(o, b))
+        continue;
       /* wake every node of the elements it touches (itself included) */
       for (size_t c = o->B->be_start[b]; c < o->B->be_start[b + 1]; ++c) {
         const size_t *cn = m->conn + o->B->be_elem[c] * (size_t)o->np;
@@ -1275,11 +1350,16 @@ hoc_status hoc_mesh_optimize(hoc_mesh *mesh, const hoc_optimize_options *options
   res.objective_initial = f;
   res.tangled_initial = tangled;
   int stalled = 0;
+  double hist_f[11], hist_q[11];
   for (int it = 1; it <= o.max_iterations; ++it) {
     size_t moved = 0;
-    /* nodes near tangled elements never sleep */
+    /* nodes near tangled elements and nodes of poor elements (q below half
+     * the mean: those that set the mesh's worst quality) never sleep */
+    double qmean = 0;
+    for (size_t e = 0; e < mesh->n_elems; ++e) qmean += ctx.qe[e];
+    qmean /= (double)(mesh->n_elems ? mesh->n_elems : 1);
     for (size_t e = 0; e < mesh->n_elems; ++e)
-      if (ctx.region[e])
+      if (ctx.region[e] || ctx.qe[e] < 0.5 * qmean)
         for (int i = 0; i < ctx.np; ++i) {
           size_t node = mesh->conn[e * (size_t)ctx.np + (size_t)i];
           if (ctx.ndof[node]) ctx.active[node] = 1;
@@ -1287,6 +1367,18 @@ hoc_status hoc_mesh_optimize(hoc_mesh *mesh, const hoc_optimize_options *options
     /* a step worth less than a small share of the average node's part of f
      * puts its block to sleep */
     ctx.min_gain = o.tolerance * f / (double)(res.free_nodes ? res.free_nodes : 1);
+    /* while untangling, every move wakes its neighbourhood (room is made by
+     * moving nodes further out); then only significant ones do */
+    ctx.wake_factor = tangled ? 1 : 10;
+    if (it == 1) {
+      HOC_TRY_GOTO(screen(&ctx), done);
+      for (size_t e = 0; e < mesh->n_elems; ++e)
+        if (ctx.qe[e] < 0.5 * qmean)
+          for (int i = 0; i < ctx.np; ++i) {
+            size_t node = mesh->conn[e * (size_t)ctx.np + (size_t)i];
+            if (ctx.ndof[node]) ctx.active[node] = 1;
+          }
+    }
     /* the natural blocks, then every node on its own */
     for (int fam = 0; fam < 2; ++fam) {
       ctx.B = &ctx.fam[fam];
@@ -1330,6 +1422,15 @@ hoc_status hoc_mesh_optimize(hoc_mesh *mesh, const hoc_optimize_options *options
     for (size_t i = 0; i < mesh->n_nodes; ++i) active += ctx.active[i];
     if (!active || !moved) {
       res.converged = tangled == 0;
+      break;
+    }
+    /* stagnation: untangled, and over the last 10 sweeps f fell by less
+     * than 5% and the worst element gained less than 0.005 */
+    hist_f[it % 11] = f;
+    hist_q[it % 11] = qmin;
+    if (tangled == 0 && it > 10 && hist_f[(it - 10) % 11] - f < 0.05 * hist_f[(it - 10) % 11] &&
+        qmin - hist_q[(it - 10) % 11] < 0.005) {
+      res.converged = 1;
       break;
     }
   }
