@@ -1,95 +1,215 @@
-/* gmsh MSH reader: 4.1 ASCII and binary, 2.2 ASCII. Keeps surface
- * triangles (one order) and the curve lines of that order; every count in
- * the file is checked against what the rest of the file can hold.
+/* gmsh MSH reader: 4.1 ASCII and binary, 2.2 ASCII. Keeps the surface
+ * triangles (of one order) and the curve lines of that order, and the nodes
+ * they use with their classification. Every count in the file is checked
+ * against what the rest of the file can hold before anything is allocated
+ * from it, and every read is bounds-checked: malformed input fails with
+ * HOC_ERR_FORMAT and one line naming the place.
  * SPDX-License-Identifier: GPL-2.0-or-later */
-#include "core/hash.h"
 #include "io/io.h"
 
 #include <errno.h>
 #include <math.h>
-#include <stdint.h>
+#include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
-/* Nodes per element of gmsh's element types (0: unknown). */
-static int type_nodes(int type) {
-  static const int n[] = {
-      0,  2,  3,  4,  4,  8,  6,  5,  3,  6,  9,  10, 27, 18, 14, 1,  8,  20, 15, 13,
-      9,  10, 12, 15, 15, 21, 4,  5,  6,  20, 35, 56, 22, 28, 0,  0,  16, 25, 36, 12,
-      16, 20, 28, 36, 45, 55, 66, 49, 64, 81, 100, 121, 18, 21, 24, 27, 30, 24, 28, 32,
-      36, 40, 7,  8,  9,  10, 11};
-  if (type >= 0 && type < (int)(sizeof n / sizeof *n)) return n[type];
-  if (type >= 71 && type <= 75) { /* tetrahedra of order 6..10 */
-    int p = type - 65;
-    return (p + 1) * (p + 2) * (p + 3) / 6;
-  }
-  if (type >= 92 && type <= 98) { /* hexahedra of order 3..9 */
-    int p = type - 89;
-    return (p + 1) * (p + 1) * (p + 1);
-  }
-  return 0;
-}
+/* Decimal numbers -------------------------------------------------------------- */
 
-/* Triangle / line order of a type, 0 if the type is neither. */
-static int triangle_order(int type) {
-  for (int p = 1; p <= 10; ++p)
-    if (hoc_msh_triangle_type(p) == type) return p;
-  return 0;
-}
-static int line_order(int type) {
-  for (int p = 1; p <= 10; ++p)
-    if (hoc_msh_line_type(p) == type) return p;
-  return 0;
-}
-
-typedef struct reader {
-  const char *data, *end, *cur;
-  const char *name;
-  int binary, swap;
-} reader;
-
-#define FAIL(r, ...) return HOC_ERROR(HOC_ERR_FORMAT, __VA_ARGS__)
-
-static void skip_space(reader *r) {
-  while (r->cur < r->end && (*r->cur == ' ' || *r->cur == '\t' || *r->cur == '\r' || *r->cur == '\n'))
-    ++r->cur;
-}
-
-/* Next whitespace-separated token into buf (NUL-terminated). */
-static int next_token(reader *r, char *buf, size_t size) {
-  skip_space(r);
-  size_t n = 0;
-  while (r->cur < r->end && !(*r->cur == ' ' || *r->cur == '\t' || *r->cur == '\r' || *r->cur == '\n')) {
-    if (n + 1 < size) buf[n++] = *r->cur;
-    ++r->cur;
-  }
+/* strtod on a copy with a NUL (the buffer the reader scans has none). */
+static int parse_double_slow(const char *s, size_t n, double *v) {
+  char buf[512];
+  if (n == 0 || n >= sizeof buf) return 0;
+  memcpy(buf, s, n);
   buf[n] = '\0';
-  return n > 0;
+  char *end;
+  *v = strtod(buf, &end);
+  return end == buf + n;
 }
 
-static hoc_status read_long(reader *r, long long *v, const char *what) {
-  char tok[64], *e;
-  if (!next_token(r, tok, sizeof tok)) FAIL(r, "'%s': file ends in %s", r->name, what);
-  errno = 0;
-  *v = strtoll(tok, &e, 10);
-  if (*e || errno) FAIL(r, "'%s': expected an integer in %s, found '%.20s'", r->name, what, tok);
+int hoc_io_parse_double(const char *s, size_t n, double *v) {
+#if defined(__SIZEOF_INT128__)
+  __extension__ typedef unsigned __int128 u128;
+  if (n > 400) return parse_double_slow(s, n, v); /* bounds the digit counters below */
+  const char *p = s, *end = s + n;
+  int neg = 0;
+  if (p < end && (*p == '-' || *p == '+')) neg = *p++ == '-';
+  uint64_t w = 0;    /* the first 19 significant digits */
+  int nd = 0;        /* digits in w */
+  int scale = 0;     /* value = w 10^(scale + exponent) */
+  int truncated = 0; /* nonzero digits beyond the 19th */
+  int digits = 0;    /* digits seen at all */
+  for (; p < end && *p >= '0' && *p <= '9'; ++p, ++digits) {
+    if (nd < 19) {
+      w = 10 * w + (uint64_t)(*p - '0');
+      nd += w != 0;
+    } else {
+      ++scale;
+      truncated |= *p != '0';
+    }
+  }
+  if (p < end && *p == '.') {
+    for (++p; p < end && *p >= '0' && *p <= '9'; ++p, ++digits) {
+      if (nd < 19) {
+        w = 10 * w + (uint64_t)(*p - '0');
+        nd += w != 0;
+        --scale;
+      } else {
+        truncated |= *p != '0';
+      }
+    }
+  }
+  if (!digits) return parse_double_slow(s, n, v); /* inf, nan or not a number */
+  if (p < end && (*p == 'e' || *p == 'E')) {
+    ++p;
+    int eneg = 0, edigits = 0, e = 0;
+    if (p < end && (*p == '-' || *p == '+')) eneg = *p++ == '-';
+    for (; p < end && *p >= '0' && *p <= '9'; ++p, ++edigits)
+      if (e < 100000) e = 10 * e + (*p - '0');
+    if (!edigits) return 0;
+    scale += eneg ? -e : e;
+  }
+  if (p != end) return 0;
+  if (w == 0 && !truncated) {
+    *v = neg ? -0.0 : 0.0;
+    return 1;
+  }
+  uint64_t ph, pl;
+  int pb;
+  if (truncated || !hoc_io_pow10(scale, &ph, &pl, &pb)) return parse_double_slow(s, n, v);
+  /* w 10^scale ~= P 2^(pb - lz) with P = (w << lz) M, 2^190 <= P < 2^192;
+   * P is below the exact product by less than 2^64 */
+  int lz = 0;
+  while (!(w >> (63 - lz)))
+    ++lz;
+  uint64_t wn = w << lz;
+  u128 p0 = (u128)wn * pl, p1 = (u128)wn * ph;
+  u128 mid = (p0 >> 64) + (uint64_t)p1;
+  uint64_t w1 = (uint64_t)mid;
+  uint64_t w2 = (uint64_t)(p1 >> 64) + (uint64_t)(mid >> 64);
+  int shift = (w2 >> 63) ? 139 : 138; /* the 53-bit mantissa is P >> shift */
+  uint64_t m = w2 >> (shift - 128);
+  int hb = (int)((w2 >> (shift - 129)) & 1);          /* the bit worth half an ulp */
+  uint64_t mask = (UINT64_C(1) << (shift - 129)) - 1; /* the bits of w2 below it */
+  if (hb == 0 && (w2 & mask) == mask && w1 == UINT64_MAX) return parse_double_slow(s, n, v);
+  if (hb == 1 && (w2 & mask) == 0 && w1 == 0) return parse_double_slow(s, n, v);
+  m += (uint64_t)hb;
+  int e2 = shift + pb - lz; /* value = m 2^e2 */
+  if (m == UINT64_C(1) << 53) {
+    m >>= 1;
+    ++e2;
+  }
+  int biased = e2 + 1075;
+  if (biased < 1 || biased > 2046) return parse_double_slow(s, n, v); /* subnormal or overflow */
+  uint64_t bits = ((uint64_t)biased << 52) | (m & ((UINT64_C(1) << 52) - 1));
+  if (neg) bits |= UINT64_C(1) << 63;
+  memcpy(v, &bits, sizeof bits);
+  return 1;
+#else
+  return parse_double_slow(s, n, v);
+#endif
+}
+
+/* Scanning ------------------------------------------------------------------- */
+
+typedef struct scan {
+  const char *begin, *p, *end;
+  const char *name;    /* for messages */
+  const char *section; /* the section being read, for messages */
+  int binary, swap;    /* binary file; its byte order differs from ours */
+  int dsize;           /* bytes of a size_t field in a binary file (4 or 8) */
+} scan;
+
+/* Record a failure with the place: "'NAME' line L ($Section): ...". */
+#if defined(__GNUC__)
+__attribute__((format(printf, 5, 6)))
+#endif
+static hoc_status
+fail_at(const scan *s, hoc_status status, int line, const char *func, const char *fmt, ...) {
+  char msg[320], where[96];
+  va_list ap;
+  va_start(ap, fmt);
+  vsnprintf(msg, sizeof msg, fmt, ap);
+  va_end(ap);
+  const char *at = s->p < s->end ? s->p : s->end;
+  if (s->binary) {
+    snprintf(where, sizeof where, "byte %zu", (size_t)(at - s->begin));
+  } else {
+    size_t ln = 1;
+    for (const char *c = s->begin; c < at; ++c)
+      ln += *c == '\n';
+    snprintf(where, sizeof where, "line %zu", ln);
+  }
+  if (s->section)
+    return hoc_error_set(status, __FILE__, line, func, "'%s' %s (%s): %s", s->name, where,
+                         s->section, msg);
+  return hoc_error_set(status, __FILE__, line, func, "'%s' %s: %s", s->name, where, msg);
+}
+#define FAIL(s, ...) return fail_at((s), HOC_ERR_FORMAT, __LINE__, __func__, __VA_ARGS__)
+#define FAIL_UNSUPPORTED(s, ...)                                                                   \
+  return fail_at((s), HOC_ERR_UNSUPPORTED, __LINE__, __func__, __VA_ARGS__)
+
+static inline int is_space(char c) {
+  return c == ' ' || c == '\n' || c == '\r' || c == '\t' || c == '\v' || c == '\f';
+}
+
+static inline void skip_space(scan *s) {
+  while (s->p < s->end && is_space(*s->p))
+    ++s->p;
+}
+
+/* The next whitespace-delimited token [*t, *t + *n); 0 at the end. */
+static inline int next_token(scan *s, const char **t, size_t *n) {
+  skip_space(s);
+  const char *b = s->p;
+  while (s->p < s->end && !is_space(*s->p))
+    ++s->p;
+  *t = b;
+  *n = (size_t)(s->p - b);
+  return *n > 0;
+}
+
+/* Past the end of the current line. */
+static void skip_line(scan *s) {
+  while (s->p < s->end && *s->p != '\n')
+    ++s->p;
+  if (s->p < s->end) ++s->p;
+}
+
+/* A quoted excerpt of a token for messages. */
+static const char *excerpt(const char *t, size_t n, char *buf, size_t size) {
+  size_t k = 0;
+  for (; k < n && k + 1 < size && k < 24; ++k)
+    buf[k] = (t[k] >= 32 && t[k] < 127) ? t[k] : '?';
+  buf[k] = '\0';
+  return buf;
+}
+
+static hoc_status ascii_i64(scan *s, int64_t *v, const char *what) {
+  const char *t;
+  size_t n;
+  if (!next_token(s, &t, &n)) FAIL(s, "the file ends in %s", what);
+  size_t k = 0;
+  int neg = 0;
+  if (t[0] == '-' || t[0] == '+') neg = t[k++] == '-';
+  if (k == n) FAIL(s, "%s: '%c' is not an integer", what, t[0]);
+  uint64_t x = 0;
+  for (; k < n; ++k) {
+    if (t[k] < '0' || t[k] > '9') {
+      char b[32];
+      FAIL(s, "%s: '%s' is not an integer", what, excerpt(t, n, b, sizeof b));
+    }
+    x = 10 * x + (uint64_t)(t[k] - '0');
+    if (x > (uint64_t)INT64_MAX) FAIL(s, "%s: integer too large", what);
+  }
+  *v = neg ? -(int64_t)x : (int64_t)x;
   return HOC_OK;
 }
 
-static hoc_status read_double(reader *r, double *v, const char *what) {
-  char tok[128], *e;
-  if (!next_token(r, tok, sizeof tok)) FAIL(r, "'%s': file ends in %s", r->name, what);
-  *v = strtod(tok, &e);
-  if (*e) FAIL(r, "'%s': expected a number in %s, found '%.20s'", r->name, what, tok);
-  if (!isfinite(*v)) FAIL(r, "'%s': non-finite number in %s", r->name, what);
-  return HOC_OK;
-}
-
-/* Binary fields, with byte swapping if the file's endianness differs. */
-static hoc_status read_bytes(reader *r, void *dst, size_t size, const char *what) {
-  if ((size_t)(r->end - r->cur) < size) FAIL(r, "'%s': file ends in %s", r->name, what);
-  memcpy(dst, r->cur, size);
-  if (r->swap) {
+static hoc_status binary_bytes(scan *s, void *dst, size_t size, const char *what) {
+  if ((size_t)(s->end - s->p) < size) FAIL(s, "the file ends in %s", what);
+  memcpy(dst, s->p, size);
+  if (s->swap) {
     unsigned char *b = dst;
     for (size_t i = 0; i < size / 2; ++i) {
       unsigned char t = b[i];
@@ -97,532 +217,741 @@ static hoc_status read_bytes(reader *r, void *dst, size_t size, const char *what
       b[size - 1 - i] = t;
     }
   }
-  r->cur += size;
+  s->p += size;
   return HOC_OK;
 }
 
-static hoc_status read_int(reader *r, long long *v, const char *what) {
-  if (!r->binary) return read_long(r, v, what);
-  int32_t x = 0;
-  HOC_TRY(read_bytes(r, &x, sizeof x, what));
-  *v = x;
+/* An int field (4 bytes in binary files). */
+static hoc_status get_int(scan *s, int *v, const char *what) {
+  if (s->binary) {
+    int32_t x = 0;
+    HOC_TRY(binary_bytes(s, &x, sizeof x, what));
+    *v = x;
+    return HOC_OK;
+  }
+  int64_t x = 0;
+  HOC_TRY(ascii_i64(s, &x, what));
+  if (x < INT32_MIN || x > INT32_MAX) FAIL(s, "%s: %lld is out of range", what, (long long)x);
+  *v = (int)x;
   return HOC_OK;
 }
 
-static hoc_status read_size(reader *r, long long *v, const char *what) {
-  if (!r->binary) return read_long(r, v, what);
-  uint64_t x = 0;
-  HOC_TRY(read_bytes(r, &x, sizeof x, what));
-  if (x > (uint64_t)INT64_MAX) FAIL(r, "'%s': absurd count in %s", r->name, what);
-  *v = (long long)x;
+/* A size_t field (dsize bytes in binary files): a count or a tag, >= 0. */
+static hoc_status get_size(scan *s, uint64_t *v, const char *what) {
+  if (s->binary) {
+    if (s->dsize == 4) {
+      uint32_t x = 0;
+      HOC_TRY(binary_bytes(s, &x, sizeof x, what));
+      *v = x;
+    } else {
+      HOC_TRY(binary_bytes(s, v, sizeof *v, what));
+    }
+    if (*v > (uint64_t)INT64_MAX) FAIL(s, "%s: absurd value %llu", what, (unsigned long long)*v);
+    return HOC_OK;
+  }
+  int64_t x = 0;
+  HOC_TRY(ascii_i64(s, &x, what));
+  if (x < 0) FAIL(s, "%s: negative value %lld", what, (long long)x);
+  *v = (uint64_t)x;
   return HOC_OK;
 }
 
-static hoc_status read_real(reader *r, double *v, const char *what) {
-  if (!r->binary) return read_double(r, v, what);
-  HOC_TRY(read_bytes(r, v, sizeof *v, what));
-  if (!isfinite(*v)) FAIL(r, "'%s': non-finite number in %s", r->name, what);
+/* A double, which must be finite. */
+static hoc_status get_real(scan *s, double *v, const char *what) {
+  if (s->binary) {
+    HOC_TRY(binary_bytes(s, v, sizeof *v, what));
+  } else {
+    const char *t;
+    size_t n;
+    if (!next_token(s, &t, &n)) FAIL(s, "the file ends in %s", what);
+    if (!hoc_io_parse_double(t, n, v)) {
+      char b[32];
+      FAIL(s, "%s: '%s' is not a number", what, excerpt(t, n, b, sizeof b));
+    }
+  }
+  if (!isfinite(*v)) FAIL(s, "%s: non-finite number", what);
   return HOC_OK;
 }
 
-/* A count must be non-negative and fit in what remains of the file, at
- * `min_bytes` per item. */
-static hoc_status check_count(reader *r, long long n, size_t min_bytes, const char *what) {
-  if (n < 0) FAIL(r, "'%s': negative count in %s", r->name, what);
-  if ((unsigned long long)n > (unsigned long long)(r->end - r->cur) / (min_bytes ? min_bytes : 1))
-    FAIL(r, "'%s': %s announces %lld items, more than the file holds", r->name, what, n);
+/* `count` items of at least `min_bytes` each must fit in the rest. */
+static hoc_status check_count(scan *s, uint64_t count, size_t min_bytes, const char *what) {
+  if (count > (uint64_t)(s->end - s->p) / (min_bytes ? min_bytes : 1))
+    FAIL(s, "%s is %llu, more than the rest of the file can hold", what, (unsigned long long)count);
   return HOC_OK;
 }
 
-/* Move past the line "$EndName" (searched as text). */
-static hoc_status skip_to_end(reader *r, const char *section) {
-  char marker[80];
-  snprintf(marker, sizeof marker, "$End%.60s", section);
-  size_t m = strlen(marker);
-  for (const char *p = r->cur; p + m <= r->end; ++p)
-    if (*p == '$' && !memcmp(p, marker, m)) {
-      r->cur = p + m;
+/* Minimum bytes of n fields in this file: ASCII tokens take at least two
+ * bytes (a digit and a separator), binary ones their size. */
+static size_t min_bytes(const scan *s, size_t ints, size_t sizes, size_t reals) {
+  if (!s->binary) return 2 * (ints + sizes + reals);
+  return 4 * ints + (size_t)s->dsize * sizes + 8 * reals;
+}
+
+/* The line "$EndName" (after optional whitespace). */
+static hoc_status expect_end(scan *s, const char *name) {
+  char want[80];
+  snprintf(want, sizeof want, "$End%s", name);
+  size_t m = strlen(want);
+  skip_space(s);
+  if ((size_t)(s->end - s->p) < m || memcmp(s->p, want, m) ||
+      (s->p + m < s->end && !is_space(s->p[m])))
+    FAIL(s, "%s expected", want);
+  s->p += m;
+  return HOC_OK;
+}
+
+/* Skip a section we do not read: up to and past its "$EndName". */
+static hoc_status skip_section(scan *s, const char *name) {
+  char want[80];
+  snprintf(want, sizeof want, "$End%s", name);
+  size_t m = strlen(want);
+  for (const char *c = s->p; (size_t)(s->end - c) >= m; ++c)
+    if (*c == '$' && !memcmp(c, want, m) && (c + m == s->end || is_space(c[m]))) {
+      s->p = c + m;
       return HOC_OK;
     }
-  FAIL(r, "'%s': section $%s has no %s", r->name, section, marker);
+  FAIL(s, "no %s", want);
 }
 
-static hoc_status expect_end(reader *r, const char *section) {
-  char tok[64], want[80];
-  snprintf(want, sizeof want, "$End%.60s", section);
-  if (!r->binary) {
-    if (!next_token(r, tok, sizeof tok) || strcmp(tok, want))
-      FAIL(r, "'%s': section $%s does not end with %s", r->name, section, want);
+/* Node tags -> positions ----------------------------------------------------- */
+
+typedef struct tag_pair {
+  uint64_t tag;
+  size_t index;
+} tag_pair;
+
+typedef struct tag_map {
+  uint64_t min;   /* smallest tag */
+  size_t range;   /* direct table size, 0 if sorted */
+  size_t *direct; /* [range] position of tag min + k, SIZE_MAX if none */
+  size_t n;
+  tag_pair *sorted; /* [n] by tag, when the tags are too sparse for a table */
+} tag_map;
+
+static int compare_pairs(const void *a, const void *b) {
+  uint64_t x = ((const tag_pair *)a)->tag, y = ((const tag_pair *)b)->tag;
+  return (x > y) - (x < y);
+}
+
+static void tag_map_free(tag_map *m) {
+  free(m->direct);
+  free(m->sorted);
+  memset(m, 0, sizeof *m);
+}
+
+/* Dense tags (the usual case) get a direct table of at most 2n + 1024
+ * entries; sparse ones a sorted array searched by bisection. */
+static hoc_status tag_map_build(tag_map *m, scan *s, const uint64_t *tags, size_t n) {
+  memset(m, 0, sizeof *m);
+  m->n = n;
+  if (!n) return HOC_OK;
+  uint64_t lo = tags[0], hi = tags[0];
+  for (size_t i = 1; i < n; ++i) {
+    if (tags[i] < lo) lo = tags[i];
+    if (tags[i] > hi) hi = tags[i];
+  }
+  m->min = lo;
+  if (hi - lo < 2 * (uint64_t)n + 1024) {
+    m->range = (size_t)(hi - lo) + 1;
+    HOC_ALLOC(m->direct, m->range);
+    for (size_t k = 0; k < m->range; ++k)
+      m->direct[k] = SIZE_MAX;
+    for (size_t i = 0; i < n; ++i) {
+      size_t *slot = &m->direct[tags[i] - lo];
+      if (*slot != SIZE_MAX) FAIL(s, "node %llu appears twice", (unsigned long long)tags[i]);
+      *slot = i;
+    }
     return HOC_OK;
   }
-  skip_space(r);
-  size_t m = strlen(want);
-  if ((size_t)(r->end - r->cur) < m || memcmp(r->cur, want, m))
-    FAIL(r, "'%s': section $%s does not end with %s", r->name, section, want);
-  r->cur += m;
+  HOC_ALLOC(m->sorted, n);
+  for (size_t i = 0; i < n; ++i)
+    m->sorted[i] = (tag_pair){tags[i], i};
+  qsort(m->sorted, n, sizeof *m->sorted, compare_pairs);
+  for (size_t i = 1; i < n; ++i)
+    if (m->sorted[i].tag == m->sorted[i - 1].tag)
+      FAIL(s, "node %llu appears twice", (unsigned long long)m->sorted[i].tag);
   return HOC_OK;
 }
 
-/* The raw mesh being built: every node read, then compacted. */
-typedef struct builder {
-  hoc_hash index; /* node tag -> position */
-  size_t n, cap;
-  size_t *tag;
-  double *xyz, *par;
-  int *dim, *ent;
-  unsigned char *has;
-  /* elements kept */
-  int order;  /* of the triangles */
-  int lorder; /* of the lines (lines of another order are dropped) */
-  size_t nt, tcap, nl, lcap;
-  size_t *tri_tags, *line_tags; /* node tags, resolved at the end */
-  int *tri_ent, *line_ent;
-} builder;
-
-static void builder_free(builder *b) {
-  hoc_hash_free(&b->index);
-  free(b->tag);
-  free(b->xyz);
-  free(b->par);
-  free(b->dim);
-  free(b->ent);
-  free(b->has);
-  free(b->tri_tags);
-  free(b->line_tags);
-  free(b->tri_ent);
-  free(b->line_ent);
+static inline size_t tag_map_get(const tag_map *m, uint64_t tag) {
+  if (m->direct)
+    return tag >= m->min && tag - m->min < m->range ? m->direct[tag - m->min] : SIZE_MAX;
+  size_t lo = 0, hi = m->n;
+  while (lo < hi) {
+    size_t mid = lo + (hi - lo) / 2;
+    if (m->sorted[mid].tag < tag)
+      lo = mid + 1;
+    else
+      hi = mid;
+  }
+  return lo < m->n && m->sorted[lo].tag == tag ? m->sorted[lo].index : SIZE_MAX;
 }
 
-static hoc_status add_node(builder *b, reader *r, long long tag, const double *x, int dim, int ent,
-                           const double *par, int npar) {
-  if (tag < 1) FAIL(r, "'%s': node tag %lld is not positive", r->name, tag);
-  if (b->n == b->cap) {
-    size_t cap = b->cap ? 2 * b->cap : 1024;
-    size_t *t = hoc_realloc(b->tag, cap, sizeof *t);
-    if (t) b->tag = t;
-    double *xx = hoc_realloc(b->xyz, 3 * cap, sizeof *xx);
-    if (xx) b->xyz = xx;
-    double *pp = hoc_realloc(b->par, 2 * cap, sizeof *pp);
-    if (pp) b->par = pp;
-    int *dd = hoc_realloc(b->dim, cap, sizeof *dd);
-    if (dd) b->dim = dd;
-    int *ee = hoc_realloc(b->ent, cap, sizeof *ee);
-    if (ee) b->ent = ee;
-    unsigned char *hh = hoc_realloc(b->has, cap, 1);
-    if (hh) b->has = hh;
-    HOC_CHECK(t && xx && pp && dd && ee && hh, HOC_ERR_MEMORY, "out of memory reading '%s'", r->name);
-    b->cap = cap;
-  }
-  int found;
-  HOC_TRY(hoc_hash_insert(&b->index, (uint64_t)tag, b->n, &found, NULL));
-  if (found) FAIL(r, "'%s': node %lld appears twice", r->name, tag);
-  size_t i = b->n++;
-  b->tag[i] = (size_t)tag;
-  memcpy(b->xyz + 3 * i, x, 3 * sizeof *x);
-  b->dim[i] = dim;
-  b->ent[i] = ent;
-  b->par[2 * i] = npar > 0 ? par[0] : 0;
-  b->par[2 * i + 1] = npar > 1 ? par[1] : 0;
-  b->has[i] = (unsigned char)(npar > 0 && dim > 0);
+/* What the file holds ---------------------------------------------------------- */
+
+typedef struct mesh_in {
+  int v2;         /* MSH 2.x */
+  int classified; /* nodes came with their entity (4.1, 2.x $ParametricNodes) */
+  /* every node of the file, in file order */
+  size_t n_nodes;
+  uint64_t *tag;      /* [n_nodes] */
+  double *xyz;        /* [n_nodes][3] */
+  double *param;      /* [n_nodes][2] */
+  signed char *dim;   /* [n_nodes] */
+  int *ent;           /* [n_nodes] */
+  unsigned char *has; /* [n_nodes] */
+  tag_map map;
+  /* triangles of one order, as node positions */
+  int order;
+  size_t n_tris, cap_tri, cap_tri_ent;
+  size_t *tri;  /* [n_tris][np] */
+  int *tri_ent; /* [n_tris] */
+  /* lines of every order (the triangles' order is known only at the end) */
+  size_t n_lines, n_line_nodes, cap_line_start, cap_line_order, cap_line_ent, cap_line_node;
+  size_t *line_start;        /* [n_lines] offset into line_node */
+  unsigned char *line_order; /* [n_lines] */
+  int *line_ent;             /* [n_lines] */
+  size_t *line_node;         /* node positions of every line, end0 end1 interior */
+  /* MSH 2.x point elements, to classify nodes */
+  size_t n_pts, cap_pt_node, cap_pt_ent;
+  size_t *pt_node; /* [n_pts] */
+  int *pt_ent;     /* [n_pts] */
+} mesh_in;
+
+static void mesh_in_free(mesh_in *m) {
+  free(m->tag);
+  free(m->xyz);
+  free(m->param);
+  free(m->dim);
+  free(m->ent);
+  free(m->has);
+  tag_map_free(&m->map);
+  free(m->tri);
+  free(m->tri_ent);
+  free(m->line_start);
+  free(m->line_order);
+  free(m->line_ent);
+  free(m->line_node);
+  free(m->pt_node);
+  free(m->pt_ent);
+  memset(m, 0, sizeof *m);
+}
+
+static hoc_status alloc_nodes(mesh_in *m, size_t n) {
+  m->n_nodes = n;
+  HOC_ALLOC(m->tag, n + 1);
+  HOC_ALLOC(m->xyz, 3 * n + 1);
+  HOC_ALLOC(m->param, 2 * n + 1);
+  HOC_ALLOC(m->dim, n + 1);
+  HOC_ALLOC(m->ent, n + 1);
+  HOC_ALLOC(m->has, n + 1);
   return HOC_OK;
 }
 
-/* Record an element of a kept type. */
-static hoc_status add_element(builder *b, reader *r, int type, int ent, const long long *nodes) {
-  int tp = triangle_order(type), lp = line_order(type);
-  if (tp) {
-    if (b->order && b->order != tp)
-      return HOC_ERROR(HOC_ERR_UNSUPPORTED, "'%s' mixes triangles of orders %d and %d", r->name,
-                       b->order, tp);
-    b->order = tp;
-  } else if (!lp) {
-    return HOC_OK;
-  } else {
-    if (!b->lorder) b->lorder = lp;
-    if (lp != b->lorder) return HOC_OK;
+/* An array of *cap elements of `size` bytes grown to hold `need`; NULL if
+ * out of memory (the old array is then still valid). */
+static void *grow(void *ptr, size_t *cap, size_t need, size_t size) {
+  if (need <= *cap) return ptr;
+  size_t c = *cap ? *cap : 256;
+  while (c < need)
+    c = c > SIZE_MAX / 4 ? need : 2 * c;
+  void *q = hoc_realloc(ptr, c, size);
+  if (q) *cap = c;
+  return q;
+}
+#define RESERVE(m, field, need)                                                                    \
+  do {                                                                                             \
+    void *q_ = grow((m)->field, &(m)->cap_##field, (need), sizeof *(m)->field);                    \
+    if (!q_) return HOC_ERROR(HOC_ERR_MEMORY, "out of memory for %zu elements", (size_t)(need));   \
+    (m)->field = q_;                                                                               \
+  } while (0)
+
+/* Room for `count` more elements of a type whose nodes are `nn`. */
+static hoc_status reserve_block(mesh_in *m, int type, size_t count, int nn) {
+  if (hoc_msh_triangle_order(type) > 0) {
+    RESERVE(m, tri, (m->n_tris + count) * (size_t)nn);
+    RESERVE(m, tri_ent, m->n_tris + count);
+  } else if (hoc_msh_line_order(type) > 0) {
+    RESERVE(m, line_start, m->n_lines + count);
+    RESERVE(m, line_order, m->n_lines + count);
+    RESERVE(m, line_ent, m->n_lines + count);
+    RESERVE(m, line_node, m->n_line_nodes + count * (size_t)nn);
+  } else if (type == 15 && m->v2) {
+    RESERVE(m, pt_node, m->n_pts + count);
+    RESERVE(m, pt_ent, m->n_pts + count);
   }
-  int nn = type_nodes(type);
-  size_t **arr = tp ? &b->tri_tags : &b->line_tags;
-  int **ents = tp ? &b->tri_ent : &b->line_ent;
-  size_t *count = tp ? &b->nt : &b->nl, *cap = tp ? &b->tcap : &b->lcap;
-  if (*count == *cap) {
-    size_t c = *cap ? 2 * *cap : 1024;
-    size_t *a = hoc_realloc(*arr, c * (size_t)nn, sizeof *a);
-    if (a) *arr = a;
-    int *e = hoc_realloc(*ents, c, sizeof *e);
-    if (e) *ents = e;
-    HOC_CHECK(a && e, HOC_ERR_MEMORY, "out of memory reading '%s'", r->name);
-    *cap = c;
-  }
+  return HOC_OK;
+}
+
+/* The node positions of an element, from its tags. */
+static hoc_status element_nodes(scan *s, const mesh_in *m, const uint64_t *tags, int nn,
+                                size_t *out) {
   for (int k = 0; k < nn; ++k) {
-    if (nodes[k] < 1) FAIL(r, "'%s': element refers to node tag %lld", r->name, nodes[k]);
-    (*arr)[*count * (size_t)nn + (size_t)k] = (size_t)nodes[k];
+    size_t i = tag_map_get(&m->map, tags[k]);
+    if (i == SIZE_MAX)
+      FAIL(s, "an element uses node %llu, which is not in the nodes section",
+           (unsigned long long)tags[k]);
+    out[k] = i;
   }
-  (*ents)[*count] = ent;
-  ++*count;
   return HOC_OK;
 }
 
-/* MSH 4.1 ---------------------------------------------------------------- */
-
-static hoc_status read_nodes41(reader *r, builder *b) {
-  long long nblocks, nnodes, mn, mx;
-  HOC_TRY(read_size(r, &nblocks, "$Nodes"));
-  HOC_TRY(read_size(r, &nnodes, "$Nodes"));
-  HOC_TRY(read_size(r, &mn, "$Nodes"));
-  HOC_TRY(read_size(r, &mx, "$Nodes"));
-  HOC_TRY(check_count(r, nblocks, 4, "$Nodes blocks"));
-  HOC_TRY(check_count(r, nnodes, 8, "$Nodes"));
-  long long total = 0;
-  for (long long blk = 0; blk < nblocks; ++blk) {
-    long long dim, tag, par, n;
-    HOC_TRY(read_int(r, &dim, "a $Nodes block"));
-    HOC_TRY(read_int(r, &tag, "a $Nodes block"));
-    HOC_TRY(read_int(r, &par, "a $Nodes block"));
-    HOC_TRY(read_size(r, &n, "a $Nodes block"));
-    if (dim < 0 || dim > 3) FAIL(r, "'%s': $Nodes block of dimension %lld", r->name, dim);
-    if (par != 0 && par != 1) FAIL(r, "'%s': $Nodes block with parametric flag %lld", r->name, par);
-    HOC_TRY(check_count(r, n, 8, "a $Nodes block"));
-    total += n;
-    if (total > nnodes) FAIL(r, "'%s': $Nodes blocks hold more nodes than announced", r->name);
-    int npar = par ? (int)dim : 0;
-    long long *tags = hoc_calloc((size_t)n + 1, sizeof *tags);
-    HOC_CHECK(tags, HOC_ERR_MEMORY, "out of memory reading '%s'", r->name);
-    hoc_status st = HOC_OK;
-    for (long long k = 0; k < n && st == HOC_OK; ++k) st = read_size(r, &tags[k], "node tags");
-    for (long long k = 0; k < n && st == HOC_OK; ++k) {
-      double x[3], u[3] = {0, 0, 0};
-      for (int c = 0; c < 3 && st == HOC_OK; ++c) st = read_real(r, &x[c], "node coordinates");
-      for (int c = 0; c < npar && st == HOC_OK; ++c) st = read_real(r, &u[c], "node parameters");
-      if (st == HOC_OK) st = add_node(b, r, tags[k], x, (int)dim, (int)tag, u, npar);
-    }
-    free(tags);
-    HOC_TRY(st);
+/* Check whether an element type is kept (and its order), before its block. */
+static hoc_status check_kept_type(scan *s, mesh_in *m, int type, int dim) {
+  int tp = hoc_msh_triangle_order(type), lp = hoc_msh_line_order(type);
+  if (tp < 0)
+    FAIL_UNSUPPORTED(s,
+                     "incomplete (serendipity) triangles of order %d (element type %d) are not "
+                     "supported",
+                     -tp, type);
+  if (tp > 0) {
+    if (dim >= 0 && dim != 2) FAIL(s, "triangles in an entity block of dimension %d", dim);
+    if (m->order && m->order != tp)
+      FAIL_UNSUPPORTED(s, "triangles of orders %d and %d in one mesh are not supported", m->order,
+                       tp);
+    m->order = tp;
   }
-  if (total != nnodes) FAIL(r, "'%s': $Nodes announces %lld nodes but holds %lld", r->name, nnodes, total);
-  return expect_end(r, "Nodes");
+  if (lp > 0 && dim >= 0 && dim != 1) FAIL(s, "lines in an entity block of dimension %d", dim);
+  return HOC_OK;
 }
 
-static hoc_status read_elements41(reader *r, builder *b) {
-  long long nblocks, nelem, mn, mx;
-  HOC_TRY(read_size(r, &nblocks, "$Elements"));
-  HOC_TRY(read_size(r, &nelem, "$Elements"));
-  HOC_TRY(read_size(r, &mn, "$Elements"));
-  HOC_TRY(read_size(r, &mx, "$Elements"));
-  HOC_TRY(check_count(r, nblocks, 4, "$Elements blocks"));
-  HOC_TRY(check_count(r, nelem, 4, "$Elements"));
-  long long total = 0, nodes[1024];
-  for (long long blk = 0; blk < nblocks; ++blk) {
-    long long dim, tag, type, n;
-    HOC_TRY(read_int(r, &dim, "an $Elements block"));
-    HOC_TRY(read_int(r, &tag, "an $Elements block"));
-    HOC_TRY(read_int(r, &type, "an $Elements block"));
-    HOC_TRY(read_size(r, &n, "an $Elements block"));
-    HOC_TRY(check_count(r, n, 4, "an $Elements block"));
-    total += n;
-    if (total > nelem) FAIL(r, "'%s': $Elements blocks hold more elements than announced", r->name);
-    int nn = type_nodes((int)type);
-    if (!nn && r->binary)
-      return HOC_ERROR(HOC_ERR_UNSUPPORTED, "'%s': unknown element type %lld in a binary file",
-                       r->name, type);
-    for (long long k = 0; k < n; ++k) {
-      long long etag;
-      HOC_TRY(read_size(r, &etag, "an element"));
-      if (!nn) { /* ASCII, unknown type: the rest of the line */
-        while (r->cur < r->end && *r->cur != '\n') ++r->cur;
-        continue;
+/* Keep an element (`nodes` are positions); room was reserved. */
+static void keep_element(mesh_in *m, int type, int ent, const size_t *nodes) {
+  int tp = hoc_msh_triangle_order(type);
+  if (tp > 0) {
+    int np = (tp + 1) * (tp + 2) / 2;
+    memcpy(m->tri + m->n_tris * (size_t)np, nodes, (size_t)np * sizeof *nodes);
+    m->tri_ent[m->n_tris++] = ent;
+    return;
+  }
+  int lp = hoc_msh_line_order(type);
+  if (lp > 0) {
+    memcpy(m->line_node + m->n_line_nodes, nodes, (size_t)(lp + 1) * sizeof *nodes);
+    m->line_start[m->n_lines] = m->n_line_nodes;
+    m->line_order[m->n_lines] = (unsigned char)lp;
+    m->line_ent[m->n_lines++] = ent;
+    m->n_line_nodes += (size_t)lp + 1;
+    return;
+  }
+  if (type == 15 && m->v2) {
+    m->pt_node[m->n_pts] = nodes[0];
+    m->pt_ent[m->n_pts++] = ent;
+  }
+}
+
+static int is_kept_type(const mesh_in *m, int type) {
+  return hoc_msh_triangle_order(type) > 0 || hoc_msh_line_order(type) > 0 || (type == 15 && m->v2);
+}
+
+/* MSH 4.1 ---------------------------------------------------------------------- */
+
+static hoc_status read_nodes41(scan *s, mesh_in *m) {
+  uint64_t n_blocks = 0, n_nodes = 0, tag_min = 0, tag_max = 0;
+  HOC_TRY(get_size(s, &n_blocks, "the number of node blocks"));
+  HOC_TRY(get_size(s, &n_nodes, "the number of nodes"));
+  HOC_TRY(get_size(s, &tag_min, "the smallest node tag"));
+  HOC_TRY(get_size(s, &tag_max, "the largest node tag"));
+  HOC_TRY(check_count(s, n_blocks, min_bytes(s, 3, 1, 0), "the number of node blocks"));
+  HOC_TRY(check_count(s, n_nodes, min_bytes(s, 0, 1, 3), "the number of nodes"));
+  HOC_TRY(alloc_nodes(m, (size_t)n_nodes));
+  size_t done = 0;
+  for (uint64_t b = 0; b < n_blocks; ++b) {
+    int dim, ent, parametric;
+    uint64_t count = 0;
+    HOC_TRY(get_int(s, &dim, "a node block's dimension"));
+    HOC_TRY(get_int(s, &ent, "a node block's entity"));
+    HOC_TRY(get_int(s, &parametric, "a node block's parametric flag"));
+    HOC_TRY(get_size(s, &count, "a node block's size"));
+    if (dim < 0 || dim > 3) FAIL(s, "node block of dimension %d", dim);
+    if (parametric != 0 && parametric != 1)
+      FAIL(s, "node block with parametric flag %d", parametric);
+    if (count > n_nodes - done)
+      FAIL(s, "the node blocks hold more nodes than the %llu announced",
+           (unsigned long long)n_nodes);
+    int npar = parametric ? dim : 0;
+    HOC_TRY(
+        check_count(s, count, min_bytes(s, 0, 1, 3 + (size_t)npar), "the size of a node block"));
+    for (size_t k = done; k < done + count; ++k) {
+      HOC_TRY(get_size(s, &m->tag[k], "a node tag"));
+      if (!m->tag[k]) FAIL(s, "node tag 0");
+    }
+    for (size_t k = done; k < done + count; ++k) {
+      double *x = m->xyz + 3 * k, u[3] = {0, 0, 0}; /* x: [3], u: up to 3 parameters */
+      for (int c = 0; c < 3; ++c)
+        HOC_TRY(get_real(s, &x[c], "node coordinates"));
+      for (int c = 0; c < npar; ++c)
+        HOC_TRY(get_real(s, &u[c], "node parameters"));
+      m->param[2 * k] = u[0];
+      m->param[2 * k + 1] = u[1];
+      m->dim[k] = (signed char)dim;
+      m->ent[k] = ent;
+      m->has[k] = (unsigned char)(parametric && (dim == 1 || dim == 2));
+    }
+    done += (size_t)count;
+  }
+  if (done != n_nodes)
+    FAIL(s, "the node blocks hold %zu nodes, %llu announced", done, (unsigned long long)n_nodes);
+  HOC_TRY(tag_map_build(&m->map, s, m->tag, m->n_nodes));
+  m->classified = 1;
+  return expect_end(s, "Nodes");
+}
+
+enum { MAX_ELEMENT_NODES = 1024 };
+
+static hoc_status read_elements41(scan *s, mesh_in *m) {
+  uint64_t n_blocks = 0, n_elems = 0, tag_min = 0, tag_max = 0;
+  HOC_TRY(get_size(s, &n_blocks, "the number of element blocks"));
+  HOC_TRY(get_size(s, &n_elems, "the number of elements"));
+  HOC_TRY(get_size(s, &tag_min, "the smallest element tag"));
+  HOC_TRY(get_size(s, &tag_max, "the largest element tag"));
+  HOC_TRY(check_count(s, n_blocks, min_bytes(s, 3, 1, 0), "the number of element blocks"));
+  HOC_TRY(check_count(s, n_elems, min_bytes(s, 0, 2, 0), "the number of elements"));
+  uint64_t done = 0, tags[MAX_ELEMENT_NODES];
+  size_t pos[MAX_ELEMENT_NODES];
+  for (uint64_t b = 0; b < n_blocks; ++b) {
+    int dim, ent, type;
+    uint64_t count = 0;
+    HOC_TRY(get_int(s, &dim, "an element block's dimension"));
+    HOC_TRY(get_int(s, &ent, "an element block's entity"));
+    HOC_TRY(get_int(s, &type, "an element block's type"));
+    HOC_TRY(get_size(s, &count, "an element block's size"));
+    if (dim < 0 || dim > 3) FAIL(s, "element block of dimension %d", dim);
+    if (count > n_elems - done)
+      FAIL(s, "the element blocks hold more elements than the %llu announced",
+           (unsigned long long)n_elems);
+    done += count;
+    int nn = hoc_msh_element_nodes(type);
+    if (!nn) { /* unknown size: ASCII elements are one per line */
+      if (s->binary)
+        FAIL_UNSUPPORTED(s, "element type %d (of unknown size) in a binary file", type);
+      HOC_TRY(check_count(s, count, 2, "the size of an element block"));
+      for (uint64_t k = 0; k < count; ++k) {
+        skip_space(s);
+        if (s->p >= s->end) FAIL(s, "the file ends in an element block");
+        skip_line(s);
       }
-      for (int j = 0; j < nn; ++j) HOC_TRY(read_size(r, &nodes[j], "an element's nodes"));
-      if (dim == 2 || dim == 1) HOC_TRY(add_element(b, r, (int)type, (int)tag, nodes));
+      continue;
+    }
+    HOC_TRY(check_kept_type(s, m, type, dim));
+    HOC_TRY(
+        check_count(s, count, min_bytes(s, 0, 1 + (size_t)nn, 0), "the size of an element block"));
+    int kept = is_kept_type(m, type);
+    if (kept) HOC_TRY(reserve_block(m, type, (size_t)count, nn));
+    for (uint64_t k = 0; k < count; ++k) {
+      uint64_t etag;
+      HOC_TRY(get_size(s, &etag, "an element tag"));
+      for (int j = 0; j < nn; ++j)
+        HOC_TRY(get_size(s, &tags[j], "an element's nodes"));
+      if (!kept) continue;
+      HOC_TRY(element_nodes(s, m, tags, nn, pos));
+      keep_element(m, type, ent, pos);
     }
   }
-  if (total != nelem)
-    FAIL(r, "'%s': $Elements announces %lld elements but holds %lld", r->name, nelem, total);
-  return expect_end(r, "Elements");
+  if (done != n_elems)
+    FAIL(s, "the element blocks hold %llu elements, %llu announced", (unsigned long long)done,
+         (unsigned long long)n_elems);
+  return expect_end(s, "Elements");
 }
 
-/* MSH 2.2 ---------------------------------------------------------------- */
+/* MSH 2.x ---------------------------------------------------------------------- */
 
-static hoc_status read_nodes22(reader *r, builder *b) {
-  long long n;
-  HOC_TRY(read_long(r, &n, "$Nodes"));
-  HOC_TRY(check_count(r, n, 8, "$Nodes"));
-  for (long long k = 0; k < n; ++k) {
-    long long tag;
-    double x[3];
-    HOC_TRY(read_long(r, &tag, "$Nodes"));
-    for (int c = 0; c < 3; ++c) HOC_TRY(read_double(r, &x[c], "node coordinates"));
-    HOC_TRY(add_node(b, r, tag, x, -1, 0, NULL, 0));
+/* $Nodes (tag x y z) or $ParametricNodes (tag x y z dim entity [u [v]]). */
+static hoc_status read_nodes2(scan *s, mesh_in *m, int parametric) {
+  uint64_t n;
+  HOC_TRY(get_size(s, &n, "the number of nodes"));
+  HOC_TRY(check_count(s, n, min_bytes(s, parametric ? 2 : 0, 1, 3), "the number of nodes"));
+  HOC_TRY(alloc_nodes(m, (size_t)n));
+  for (size_t k = 0; k < n; ++k) {
+    HOC_TRY(get_size(s, &m->tag[k], "a node tag"));
+    if (!m->tag[k]) FAIL(s, "node tag 0");
+    for (int c = 0; c < 3; ++c)
+      HOC_TRY(get_real(s, &m->xyz[3 * k + (size_t)c], "node coordinates"));
+    m->dim[k] = -1;
+    if (!parametric) continue;
+    int dim, ent;
+    HOC_TRY(get_int(s, &dim, "a node's dimension"));
+    HOC_TRY(get_int(s, &ent, "a node's entity"));
+    if (dim < 0 || dim > 3) FAIL(s, "node of dimension %d", dim);
+    int npar = dim == 1 || dim == 2 ? dim : 0;
+    for (int c = 0; c < npar; ++c)
+      HOC_TRY(get_real(s, &m->param[2 * k + (size_t)c], "node parameters"));
+    m->dim[k] = (signed char)dim;
+    m->ent[k] = ent;
+    m->has[k] = (unsigned char)(npar > 0);
   }
-  return expect_end(r, "Nodes");
+  HOC_TRY(tag_map_build(&m->map, s, m->tag, m->n_nodes));
+  m->classified = parametric;
+  return expect_end(s, parametric ? "ParametricNodes" : "Nodes");
 }
 
-static hoc_status read_elements22(reader *r, builder *b, size_t **points, size_t *n_points,
-                                  int **point_ent) {
-  long long n, nodes[1024];
-  HOC_TRY(read_long(r, &n, "$Elements"));
-  HOC_TRY(check_count(r, n, 8, "$Elements"));
-  size_t cap = 0;
-  for (long long k = 0; k < n; ++k) {
-    long long tag, type, ntags, t = 0, ent = 0;
-    HOC_TRY(read_long(r, &tag, "$Elements"));
-    HOC_TRY(read_long(r, &type, "$Elements"));
-    HOC_TRY(read_long(r, &ntags, "$Elements"));
-    if (ntags < 0 || ntags > 64) FAIL(r, "'%s': element %lld has %lld tags", r->name, tag, ntags);
-    for (long long j = 0; j < ntags; ++j) {
-      HOC_TRY(read_long(r, &t, "element tags"));
-      if (j == 1) ent = t; /* the elementary entity */
+static hoc_status read_elements2(scan *s, mesh_in *m) {
+  uint64_t n, tags[MAX_ELEMENT_NODES];
+  size_t pos[MAX_ELEMENT_NODES];
+  HOC_TRY(get_size(s, &n, "the number of elements"));
+  HOC_TRY(check_count(s, n, min_bytes(s, 2, 2, 0), "the number of elements"));
+  for (uint64_t k = 0; k < n; ++k) {
+    uint64_t etag;
+    int type, ntags, ent = 0;
+    HOC_TRY(get_size(s, &etag, "an element tag"));
+    HOC_TRY(get_int(s, &type, "an element's type"));
+    HOC_TRY(get_int(s, &ntags, "an element's number of tags"));
+    if (ntags < 0) FAIL(s, "element %llu has %d tags", (unsigned long long)etag, ntags);
+    HOC_TRY(check_count(s, (uint64_t)ntags, 2, "an element's number of tags"));
+    for (int j = 0; j < ntags; ++j) {
+      int t = 0;
+      HOC_TRY(get_int(s, &t, "an element's tags"));
+      if (j == 1) ent = t; /* physical, elementary entity, partitions... */
     }
-    int nn = type_nodes((int)type);
-    if (!nn) FAIL(r, "'%s': unknown element type %lld", r->name, type);
-    for (int j = 0; j < nn; ++j) HOC_TRY(read_long(r, &nodes[j], "element nodes"));
-    if (type == 15) {
-      if (*n_points == cap) {
-        cap = cap ? 2 * cap : 64;
-        size_t *p = hoc_realloc(*points, cap, sizeof *p);
-        if (p) *points = p;
-        int *e = hoc_realloc(*point_ent, cap, sizeof *e);
-        if (e) *point_ent = e;
-        HOC_CHECK(p && e, HOC_ERR_MEMORY, "out of memory");
-      }
-      if (nodes[0] < 1) FAIL(r, "'%s': point element refers to node %lld", r->name, nodes[0]);
-      (*points)[*n_points] = (size_t)nodes[0];
-      (*point_ent)[(*n_points)++] = (int)ent;
-    } else {
-      HOC_TRY(add_element(b, r, (int)type, (int)ent, nodes));
+    int nn = hoc_msh_element_nodes(type);
+    if (!nn) { /* unknown size: the rest of the line */
+      skip_line(s);
+      continue;
     }
+    HOC_TRY(check_kept_type(s, m, type, -1));
+    for (int j = 0; j < nn; ++j)
+      HOC_TRY(get_size(s, &tags[j], "an element's nodes"));
+    if (!is_kept_type(m, type)) continue;
+    HOC_TRY(element_nodes(s, m, tags, nn, pos));
+    HOC_TRY(reserve_block(m, type, 1, nn));
+    keep_element(m, type, ent, pos);
   }
-  return expect_end(r, "Elements");
+  return expect_end(s, "Elements");
 }
 
-/* Driver ------------------------------------------------------------------- */
+/* The result -------------------------------------------------------------------- */
 
-/* Keep the nodes the kept elements use; resolve tags to indices. */
-static hoc_status finish(reader *r, builder *b, hoc_msh_raw *raw) {
-  int p = b->order;
-  if (!b->nt) FAIL(r, "'%s' holds no triangles", r->name);
-  int np = (p + 1) * (p + 2) / 2;
-  size_t *newi = hoc_calloc(b->n + 1, sizeof *newi);
-  HOC_CHECK(newi, HOC_ERR_MEMORY, "out of memory");
-  for (size_t i = 0; i < b->n; ++i) newi[i] = SIZE_MAX;
-  size_t count = 0;
+/* Give node j the entity (d, t) if it is lexicographically smaller. */
+static void classify_node(hoc_msh_raw *raw, size_t j, int d, int t) {
+  if (d < raw->node_dim[j] || (d == raw->node_dim[j] && t < raw->node_entity_tag[j])) {
+    raw->node_dim[j] = d;
+    raw->node_entity_tag[j] = t;
+  }
+}
+
+/* Keep the nodes the kept elements use, in file order; for files without
+ * classification, give each node the lowest (dim, entity) of the elements
+ * using it. */
+static hoc_status finish(const mesh_in *m, hoc_msh_raw *raw) {
+  int p = m->order, np = p ? (p + 1) * (p + 2) / 2 : 0;
+  size_t n = m->n_nodes, n_tris = p ? m->n_tris : 0, n_lines = 0;
+  for (size_t l = 0; l < m->n_lines; ++l)
+    n_lines += p && m->line_order[l] == p;
+  size_t *newi;
+  HOC_ALLOC(newi, n + 1);
+  for (size_t i = 0; i < n; ++i)
+    newi[i] = SIZE_MAX;
+  for (size_t k = 0; k < n_tris * (size_t)np; ++k)
+    newi[m->tri[k]] = 0;
+  for (size_t l = 0; l < m->n_lines; ++l)
+    if (p && m->line_order[l] == p)
+      for (int k = 0; k <= p; ++k)
+        newi[m->line_node[m->line_start[l] + (size_t)k]] = 0;
+  size_t used = 0;
+  for (size_t i = 0; i < n; ++i)
+    if (newi[i] != SIZE_MAX) newi[i] = used++;
   hoc_status status = HOC_OK;
-  /* lines of another order than the triangles are dropped */
-  size_t keep_lines = b->lorder == p ? b->nl : 0;
   raw->order = p;
-  raw->n_tris = b->nt;
-  raw->tri_nodes = hoc_calloc(b->nt * (size_t)np, sizeof *raw->tri_nodes);
-  raw->tri_surface_tag = hoc_calloc(b->nt, sizeof *raw->tri_surface_tag);
-  raw->line_nodes = hoc_calloc(keep_lines * (size_t)(p + 1) + 1, sizeof *raw->line_nodes);
-  raw->line_curve_tag = hoc_calloc(keep_lines + 1, sizeof *raw->line_curve_tag);
-  if (!raw->tri_nodes || !raw->tri_surface_tag || !raw->line_nodes || !raw->line_curve_tag) {
-    status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
-    goto done;
-  }
-  for (size_t e = 0; e < b->nt; ++e) {
-    raw->tri_surface_tag[e] = b->tri_ent[e];
-    for (int k = 0; k < np; ++k) {
-      size_t i = hoc_hash_get(&b->index, b->tri_tags[e * (size_t)np + (size_t)k]);
-      if (i == SIZE_MAX) {
-        status = HOC_ERROR(HOC_ERR_FORMAT, "'%s': a triangle uses node %zu, which is not in $Nodes",
-                           r->name, b->tri_tags[e * (size_t)np + (size_t)k]);
-        goto done;
-      }
-      if (newi[i] == SIZE_MAX) newi[i] = count++;
-      raw->tri_nodes[e * (size_t)np + (size_t)k] = newi[i];
-    }
-  }
-  /* lines: b->line_tags holds lines of any order; keep those of order p */
-  size_t nl = 0;
-  for (size_t l = 0; l < keep_lines; ++l) {
-    size_t base = l * (size_t)(p + 1);
-    int ok = 1;
-    size_t idx[11];
-    for (int k = 0; k <= p && ok; ++k) {
-      size_t i = hoc_hash_get(&b->index, b->line_tags[base + (size_t)k]);
-      if (i == SIZE_MAX) ok = 0;
-      else idx[k] = i;
-    }
-    if (!ok) continue;
-    for (int k = 0; k <= p; ++k) {
-      if (newi[idx[k]] == SIZE_MAX) newi[idx[k]] = count++;
-      raw->line_nodes[nl * (size_t)(p + 1) + (size_t)k] = newi[idx[k]];
-    }
-    raw->line_curve_tag[nl++] = b->line_ent[l];
-  }
-  raw->n_lines = nl;
-  raw->n_nodes = count;
-  raw->node_tag = hoc_calloc(count + 1, sizeof *raw->node_tag);
-  raw->xyz = hoc_calloc(3 * count + 1, sizeof *raw->xyz);
-  raw->param = hoc_calloc(2 * count + 1, sizeof *raw->param);
-  raw->node_dim = hoc_calloc(count + 1, sizeof *raw->node_dim);
-  raw->node_entity_tag = hoc_calloc(count + 1, sizeof *raw->node_entity_tag);
-  raw->has_param = hoc_calloc(count + 1, 1);
-  if (!raw->node_tag || !raw->xyz || !raw->param || !raw->node_dim || !raw->node_entity_tag ||
-      !raw->has_param) {
-    status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
-    goto done;
-  }
-  for (size_t i = 0; i < b->n; ++i) {
+  raw->n_nodes = used;
+  raw->n_tris = n_tris;
+  raw->n_lines = n_lines;
+  HOC_ALLOC_GOTO(raw->node_tag, used + 1, done);
+  HOC_ALLOC_GOTO(raw->xyz, 3 * used + 1, done);
+  HOC_ALLOC_GOTO(raw->node_dim, used + 1, done);
+  HOC_ALLOC_GOTO(raw->node_entity_tag, used + 1, done);
+  HOC_ALLOC_GOTO(raw->param, 2 * used + 1, done);
+  HOC_ALLOC_GOTO(raw->has_param, used + 1, done);
+  HOC_ALLOC_GOTO(raw->tri_nodes, n_tris * (size_t)np + 1, done);
+  HOC_ALLOC_GOTO(raw->tri_surface_tag, n_tris + 1, done);
+  HOC_ALLOC_GOTO(raw->line_nodes, n_lines * (size_t)(p + 1) + 1, done);
+  HOC_ALLOC_GOTO(raw->line_curve_tag, n_lines + 1, done);
+  for (size_t i = 0; i < n; ++i) {
     size_t j = newi[i];
     if (j == SIZE_MAX) continue;
-    raw->node_tag[j] = b->tag[i];
-    memcpy(raw->xyz + 3 * j, b->xyz + 3 * i, 3 * sizeof(double));
-    memcpy(raw->param + 2 * j, b->par + 2 * i, 2 * sizeof(double));
-    raw->node_dim[j] = b->dim[i];
-    raw->node_entity_tag[j] = b->ent[i];
-    raw->has_param[j] = b->has[i];
+    raw->node_tag[j] = (size_t)m->tag[i];
+    memcpy(raw->xyz + 3 * j, m->xyz + 3 * i, 3 * sizeof *raw->xyz);
+    memcpy(raw->param + 2 * j, m->param + 2 * i, 2 * sizeof *raw->param);
+    raw->node_dim[j] = m->classified ? m->dim[i] : -1;
+    raw->node_entity_tag[j] = m->classified ? m->ent[i] : 0;
+    raw->has_param[j] = m->has[i];
+  }
+  for (size_t e = 0; e < n_tris; ++e) {
+    raw->tri_surface_tag[e] = m->tri_ent[e];
+    for (int k = 0; k < np; ++k)
+      raw->tri_nodes[e * (size_t)np + (size_t)k] = newi[m->tri[e * (size_t)np + (size_t)k]];
+  }
+  size_t nl = 0;
+  for (size_t l = 0; l < m->n_lines; ++l) {
+    if (!p || m->line_order[l] != p) continue;
+    raw->line_curve_tag[nl] = m->line_ent[l];
+    for (int k = 0; k <= p; ++k)
+      raw->line_nodes[nl * (size_t)(p + 1) + (size_t)k] =
+          newi[m->line_node[m->line_start[l] + (size_t)k]];
+    ++nl;
+  }
+  if (!m->classified) {
+    /* lexicographically smallest (dim, entity): points, then lines, then triangles */
+    const int none = 127;
+    for (size_t j = 0; j < used; ++j)
+      raw->node_dim[j] = none;
+    for (size_t k = 0; k < m->n_pts; ++k)
+      if (newi[m->pt_node[k]] != SIZE_MAX) classify_node(raw, newi[m->pt_node[k]], 0, m->pt_ent[k]);
+    for (size_t l = 0; l < n_lines; ++l)
+      for (int k = 0; k <= p; ++k)
+        classify_node(raw, raw->line_nodes[l * (size_t)(p + 1) + (size_t)k], 1,
+                      raw->line_curve_tag[l]);
+    for (size_t e = 0; e < n_tris; ++e)
+      for (int k = 0; k < np; ++k)
+        classify_node(raw, raw->tri_nodes[e * (size_t)np + (size_t)k], 2, raw->tri_surface_tag[e]);
+    for (size_t j = 0; j < used; ++j)
+      if (raw->node_dim[j] == none) raw->node_dim[j] = -1, raw->node_entity_tag[j] = 0;
   }
 done:
   free(newi);
   return status;
 }
 
-/* MSH 2.2: a node's entity is the lowest-dimensional kept element using it. */
-static void classify22(hoc_msh_raw *raw, const builder *b, const size_t *points, size_t n_points,
-                       const int *point_ent) {
-  int p = raw->order, np = (p + 1) * (p + 2) / 2;
-  for (size_t i = 0; i < raw->n_nodes; ++i) raw->node_dim[i] = -1;
-  for (size_t e = 0; e < raw->n_tris; ++e)
-    for (int k = 0; k < np; ++k) {
-      size_t i = raw->tri_nodes[e * (size_t)np + (size_t)k];
-      if (raw->node_dim[i] < 0) raw->node_dim[i] = 2, raw->node_entity_tag[i] = raw->tri_surface_tag[e];
-    }
-  for (size_t l = 0; l < raw->n_lines; ++l)
-    for (int k = 0; k <= p; ++k) {
-      size_t i = raw->line_nodes[l * (size_t)(p + 1) + (size_t)k];
-      if (raw->node_dim[i] < 0 || raw->node_dim[i] > 1)
-        raw->node_dim[i] = 1, raw->node_entity_tag[i] = raw->line_curve_tag[l];
-    }
-  /* points: map their node tags through the raw node tags */
-  hoc_hash h;
-  if (hoc_hash_init(&h, raw->n_nodes) != HOC_OK) return;
-  for (size_t i = 0; i < raw->n_nodes; ++i) hoc_hash_insert(&h, raw->node_tag[i], i, NULL, NULL);
-  for (size_t k = 0; k < n_points; ++k) {
-    size_t i = hoc_hash_get(&h, points[k]);
-    if (i != SIZE_MAX) raw->node_dim[i] = 0, raw->node_entity_tag[i] = point_ent[k];
+/* The file -------------------------------------------------------------------------- */
+
+static hoc_status read_header(scan *s, mesh_in *m) {
+  const char *t;
+  size_t n;
+  if (!next_token(s, &t, &n) || n != 11 || memcmp(t, "$MeshFormat", 11))
+    return HOC_ERROR(HOC_ERR_FORMAT, "'%s' is not a gmsh .msh file", s->name);
+  s->section = "$MeshFormat";
+  if (!next_token(s, &t, &n)) FAIL(s, "the file ends before the version");
+  double version;
+  char b[32];
+  if (!hoc_io_parse_double(t, n, &version) || !isfinite(version))
+    FAIL(s, "'%s' is not a version number", excerpt(t, n, b, sizeof b));
+  int file_type, data_size;
+  HOC_TRY(get_int(s, &file_type, "the file type"));
+  HOC_TRY(get_int(s, &data_size, "the data size"));
+  if (version >= 2 && version < 3) {
+    m->v2 = 1;
+  } else if (fabs(version - 4.1) > 1e-9) {
+    FAIL_UNSUPPORTED(s,
+                     "MSH version %s is not supported (4.1 or 2.2; gmsh can re-save it: "
+                     "gmsh FILE -save -format msh41)",
+                     excerpt(t, n, b, sizeof b));
   }
-  hoc_hash_free(&h);
-  (void)b;
+  if (file_type != 0 && file_type != 1) FAIL(s, "file type %d (0 or 1 expected)", file_type);
+  if (data_size != 4 && data_size != 8) FAIL(s, "data size %d (8 expected)", data_size);
+  if (file_type == 1) {
+    if (m->v2)
+      FAIL_UNSUPPORTED(s, "binary MSH 2 files are not supported (ASCII 2.2 or MSH 4.1 are)");
+    skip_line(s);
+    uint32_t one;
+    if ((size_t)(s->end - s->p) < sizeof one) FAIL(s, "the file ends in the binary header");
+    memcpy(&one, s->p, sizeof one);
+    s->p += sizeof one;
+    if (one == 1)
+      s->swap = 0;
+    else if (one == UINT32_C(0x01000000))
+      s->swap = 1;
+    else
+      FAIL(s, "unreadable binary byte-order mark");
+    s->binary = 1;
+    s->dsize = data_size;
+  }
+  return expect_end(s, "MeshFormat");
+}
+
+static hoc_status read_sections(scan *s, mesh_in *m) {
+  int have_nodes = 0, have_elements = 0;
+  char name[72];
+  for (;;) {
+    s->section = NULL;
+    skip_space(s);
+    if (s->p >= s->end) break;
+    const char *t;
+    size_t n;
+    next_token(s, &t, &n);
+    char b[32];
+    if (t[0] != '$' || n < 2)
+      FAIL(s, "a section ($Name) expected, found '%s'", excerpt(t, n, b, sizeof b));
+    if (n >= sizeof name) FAIL(s, "section name '%s...' too long", excerpt(t, n, b, sizeof b));
+    memcpy(name, t, n);
+    name[n] = '\0';
+    s->section = name;
+    if (s->binary) skip_line(s); /* binary data starts on the next line */
+    int is_nodes = !strcmp(name, "$Nodes") || (m->v2 && !strcmp(name, "$ParametricNodes"));
+    if (is_nodes) {
+      if (have_nodes) FAIL(s, "a second nodes section");
+      have_nodes = 1;
+      if (m->v2)
+        HOC_TRY(read_nodes2(s, m, name[1] == 'P'));
+      else
+        HOC_TRY(read_nodes41(s, m));
+    } else if (!strcmp(name, "$Elements")) {
+      if (have_elements) FAIL(s, "a second $Elements section");
+      if (!have_nodes) FAIL(s, "$Elements comes before the nodes");
+      have_elements = 1;
+      if (m->v2)
+        HOC_TRY(read_elements2(s, m));
+      else
+        HOC_TRY(read_elements41(s, m));
+    } else {
+      HOC_TRY(skip_section(s, name + 1));
+    }
+  }
+  s->section = NULL;
+  if (!have_nodes) FAIL(s, "no $Nodes section");
+  if (!have_elements) FAIL(s, "no $Elements section");
+  return HOC_OK;
 }
 
 hoc_status hoc_msh_read_buffer(const char *data, size_t size, const char *name, hoc_msh_raw *raw) {
-  HOC_CHECK(raw, HOC_ERR_ARGUMENT, "NULL output");
+  HOC_CHECK(raw, HOC_ERR_ARGUMENT, "no output given");
   memset(raw, 0, sizeof *raw);
-  HOC_CHECK(data || !size, HOC_ERR_ARGUMENT, "NULL data");
-  reader r = {data, data + size, data, name ? name : "mesh", 0, 0};
-  char tok[64];
-  if (!next_token(&r, tok, sizeof tok) || strcmp(tok, "$MeshFormat"))
-    FAIL(&r, "'%s' is not a gmsh .msh file", r.name);
-  double version;
-  long long ftype, dsize;
-  HOC_TRY(read_double(&r, &version, "$MeshFormat"));
-  HOC_TRY(read_long(&r, &ftype, "$MeshFormat"));
-  HOC_TRY(read_long(&r, &dsize, "$MeshFormat"));
-  int v41 = version >= 4.1 && version < 5, v22 = version >= 2 && version < 3;
-  if (!v41 && !v22)
-    return HOC_ERROR(HOC_ERR_UNSUPPORTED, "'%s': MSH version %g is not supported (4.1 or 2.2)",
-                     r.name, version);
-  if (ftype != 0 && ftype != 1) FAIL(&r, "'%s': file type %lld in $MeshFormat", r.name, ftype);
-  if (ftype == 1 && v22)
-    return HOC_ERROR(HOC_ERR_UNSUPPORTED, "'%s': binary MSH 2.2 is not supported", r.name);
-  if (dsize != 8) FAIL(&r, "'%s': data size %lld (8 expected)", r.name, dsize);
-  if (ftype == 1) {
-    /* one int 1 right after the newline tells the endianness */
-    while (r.cur < r.end && *r.cur != '\n') ++r.cur;
-    if (r.cur < r.end) ++r.cur;
-    int32_t one;
-    if ((size_t)(r.end - r.cur) < sizeof one) FAIL(&r, "'%s': truncated $MeshFormat", r.name);
-    memcpy(&one, r.cur, sizeof one);
-    r.cur += sizeof one;
-    if (one == 1) r.swap = 0;
-    else if (one == 0x01000000) r.swap = 1;
-    else FAIL(&r, "'%s': unreadable binary header", r.name);
-    r.binary = 1;
-  }
-  HOC_TRY(expect_end(&r, "MeshFormat"));
-  builder b = {0};
-  size_t *points = NULL, n_points = 0;
-  int *point_ent = NULL;
-  hoc_status status = HOC_OK;
-  int have_nodes = 0, have_elements = 0;
-  HOC_TRY_GOTO(hoc_hash_init(&b.index, 1024), done);
-  for (;;) {
-    skip_space(&r);
-    if (r.cur >= r.end) break;
-    if (!next_token(&r, tok, sizeof tok)) break;
-    if (tok[0] != '$') {
-      status = HOC_ERROR(HOC_ERR_FORMAT, "'%s': expected a section, found '%.20s'", r.name, tok);
-      goto done;
-    }
-    if (r.binary) { /* past the newline that ends the section name */
-      while (r.cur < r.end && *r.cur != '\n') ++r.cur;
-      if (r.cur < r.end) ++r.cur;
-    }
-    if (!strcmp(tok, "$Nodes")) {
-      if (have_nodes) {
-        status = HOC_ERROR(HOC_ERR_FORMAT, "'%s': two $Nodes sections", r.name);
-        goto done;
-      }
-      have_nodes = 1;
-      HOC_TRY_GOTO(v41 ? read_nodes41(&r, &b) : read_nodes22(&r, &b), done);
-    } else if (!strcmp(tok, "$Elements")) {
-      if (have_elements) {
-        status = HOC_ERROR(HOC_ERR_FORMAT, "'%s': two $Elements sections", r.name);
-        goto done;
-      }
-      have_elements = 1;
-      HOC_TRY_GOTO(v41 ? read_elements41(&r, &b) : read_elements22(&r, &b, &points, &n_points, &point_ent),
-                   done);
-    } else {
-      HOC_TRY_GOTO(skip_to_end(&r, tok + 1), done);
-    }
-  }
-  if (!have_nodes || !have_elements) {
-    status = HOC_ERROR(HOC_ERR_FORMAT, "'%s' has no %s section", r.name, have_nodes ? "$Elements" : "$Nodes");
-    goto done;
-  }
-  HOC_TRY_GOTO(finish(&r, &b, raw), done);
-  if (v22) classify22(raw, &b, points, n_points, point_ent);
-done:
-  builder_free(&b);
-  free(points);
-  free(point_ent);
+  HOC_CHECK(data || !size, HOC_ERR_ARGUMENT, "no data given");
+  scan s = {data, data, data + size, name ? name : "mesh", NULL, 0, 0, 8};
+  if (!data) s.begin = s.p = s.end = "";
+  mesh_in m = {0};
+  hoc_status status = read_header(&s, &m);
+  if (status == HOC_OK) status = read_sections(&s, &m);
+  if (status == HOC_OK) status = finish(&m, raw);
+  mesh_in_free(&m);
   if (status != HOC_OK) hoc_msh_raw_free(raw);
   return status;
 }
 
 hoc_status hoc_msh_read(const char *path, hoc_msh_raw *raw) {
-  HOC_CHECK(raw, HOC_ERR_ARGUMENT, "NULL output");
+  HOC_CHECK(raw, HOC_ERR_ARGUMENT, "no output given");
   memset(raw, 0, sizeof *raw);
   HOC_CHECK(path && path[0], HOC_ERR_ARGUMENT, "no mesh file name given");
   FILE *f = fopen(path, "rb");
   if (!f) return HOC_ERROR(HOC_ERR_IO, "cannot open '%s': %s", path, strerror(errno));
-  if (fseek(f, 0, SEEK_END) != 0) {
+  struct stat st;
+  if (fstat(fileno(f), &st) == 0 && S_ISDIR(st.st_mode)) {
     fclose(f);
-    return HOC_ERROR(HOC_ERR_IO, "cannot read '%s'", path);
+    return HOC_ERROR(HOC_ERR_IO, "cannot read '%s': it is a directory", path);
   }
-  long size = ftell(f);
-  rewind(f);
-  if (size < 0) {
-    fclose(f);
-    return HOC_ERROR(HOC_ERR_IO, "cannot read '%s' (not a regular file?)", path);
+  /* the size is a hint only (pipes have none) */
+  size_t cap = st.st_size > 0 ? (size_t)st.st_size + 1 : 1 << 16, len = 0;
+  char *data = malloc(cap);
+  hoc_status status = HOC_OK;
+  for (;;) {
+    if (!data) {
+      status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory reading '%s' (%zu bytes)", path, cap);
+      break;
+    }
+    len += fread(data + len, 1, cap - len, f);
+    if (ferror(f)) {
+      status = HOC_ERROR(HOC_ERR_IO, "cannot read '%s': %s", path, strerror(errno ? errno : EIO));
+      break;
+    }
+    if (feof(f)) break;
+    if (len == cap) {
+      char *more = cap < SIZE_MAX / 2 ? realloc(data, 2 * cap) : NULL;
+      if (!more) free(data);
+      data = more;
+      cap *= 2;
+    }
   }
-  char *data = hoc_calloc((size_t)size + 1, 1);
-  if (!data) {
-    fclose(f);
-    return HOC_ERROR(HOC_ERR_MEMORY, "out of memory for '%s' (%ld bytes)", path, size);
-  }
-  size_t got = fread(data, 1, (size_t)size, f);
-  int err = ferror(f);
   fclose(f);
-  if (err || got != (size_t)size) {
-    free(data);
-    return HOC_ERROR(HOC_ERR_IO, "cannot read '%s'", path);
-  }
-  hoc_status st = hoc_msh_read_buffer(data, got, path, raw);
+  if (status == HOC_OK) status = hoc_msh_read_buffer(data, len, path, raw);
   free(data);
-  return st;
+  return status;
 }
 
 void hoc_msh_raw_free(hoc_msh_raw *raw) {

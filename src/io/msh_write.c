@@ -1,11 +1,17 @@
 /* gmsh MSH 4.1 ASCII writer: entities, parametric nodes grouped by entity,
- * lines and high-order triangles.
+ * curve lines and surface triangles of order 1..10. Also the MSH element
+ * type tables and the exact decimal conversion (printf "%.17g" semantics)
+ * that the writer and the reader share.
  * SPDX-License-Identifier: GPL-2.0-or-later */
 #include "io/io.h"
 
+#include <errno.h>
 #include <math.h>
+#include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
+
+/* Element types ------------------------------------------------------------ */
 
 int hoc_msh_triangle_type(int p) {
   static const int types[11] = {0, 2, 9, 21, 23, 25, 42, 43, 44, 45, 46};
@@ -17,135 +23,758 @@ int hoc_msh_line_type(int p) {
   return p >= 1 && p <= 10 ? types[p] : 0;
 }
 
-static void put_bbox(FILE *fp, const double *bb) {
-  fprintf(fp, "%.17g %.17g %.17g %.17g %.17g %.17g", bb[0], bb[1], bb[2], bb[3], bb[4], bb[5]);
+int hoc_msh_element_nodes(int type) {
+  /* gmshModelMeshGetElementProperties of every type gmsh 4.8 knows (0: it
+   * does not know the type, or the element has a variable size) */
+  /* clang-format off */
+  static const short nodes[138] = {
+      0,   2,   3,   4,   4,   8,   6,   5,   3,   6,   /* 0-9 */
+      9,   10,  27,  18,  14,  1,   8,   20,  15,  13,  /* 10-19 */
+      9,   10,  12,  15,  15,  21,  4,   5,   6,   20,  /* 20-29 */
+      35,  56,  22,  28,  0,   0,   16,  25,  36,  12,  /* 30-39 */
+      16,  20,  28,  36,  45,  55,  66,  49,  64,  81,  /* 40-49 */
+      100, 121, 18,  21,  24,  27,  30,  24,  28,  32,  /* 50-59 */
+      36,  40,  7,   8,   9,   10,  11,  0,   0,   0,   /* 60-69 */
+      0,   84,  120, 165, 220, 286, 0,   0,   0,   34,  /* 70-79 */
+      40,  46,  52,  58,  1,   1,   1,   1,   1,   1,   /* 80-89 */
+      0,   0,   64,  125, 216, 343, 512, 729, 1000, 32, /* 90-99 */
+      44,  56,  68,  80,  92,  104, 0,   0,   0,   0,   /* 100-109 */
+      0,   0,   0,   0,   0,   0,   0,   0,   30,  55,  /* 110-119 */
+      91,  140, 204, 285, 385, 21,  29,  37,  45,  53,  /* 120-129 */
+      61,  69,  1,   0,   0,   0,   0,   16};           /* 130-137 */
+  /* clang-format on */
+  return type >= 0 && type < (int)(sizeof nodes / sizeof *nodes) ? nodes[type] : 0;
 }
 
-/* Stable order of the items by (key1, key2) with a merge sort. */
-static void sort_by_keys(size_t n, const int *k1, const int *k2, size_t *order, size_t *tmp) {
-  for (size_t i = 0; i < n; ++i) order[i] = i;
-  for (size_t w = 1; w < n; w *= 2) {
-    for (size_t lo = 0; lo < n; lo += 2 * w) {
-      size_t mid = lo + w < n ? lo + w : n, hi = lo + 2 * w < n ? lo + 2 * w : n;
-      size_t a = lo, b = mid, o = lo;
-      while (a < mid || b < hi) {
-        int take_a = b >= hi;
-        if (!take_a && a < mid) {
-          size_t x = order[a], y = order[b];
-          take_a = k1[x] < k1[y] || (k1[x] == k1[y] && k2[x] <= k2[y]);
-        }
-        tmp[o++] = take_a ? order[a++] : order[b++];
+int hoc_msh_triangle_order(int type) {
+  for (int p = 1; p <= 10; ++p)
+    if (hoc_msh_triangle_type(p) == type) return p;
+  /* incomplete triangles: 9, 12, 15 nodes (orders 3-5), 18..30 (orders 6-10) */
+  switch (type) {
+  case 20: return -3;
+  case 22: return -4;
+  case 24: return -5;
+  default: return type >= 52 && type <= 56 ? -(type - 46) : 0;
+  }
+}
+
+int hoc_msh_line_order(int type) {
+  for (int p = 1; p <= 10; ++p)
+    if (hoc_msh_line_type(p) == type) return p;
+  return 0;
+}
+
+/* Powers of ten as 128-bit mantissas --------------------------------------- */
+
+enum { POW10_MIN = -350, POW10_MAX = 350, BIG_LIMBS = 48, NEG_SHIFT = 1400 };
+
+typedef struct pow10_entry {
+  uint64_t hi, lo;
+  int b;
+} pow10_entry;
+
+static pow10_entry pow10_table[POW10_MAX - POW10_MIN + 1];
+static pthread_once_t pow10_once = PTHREAD_ONCE_INIT;
+
+/* Little-endian 32-bit limbs of a nonnegative integer. */
+typedef struct big {
+  uint32_t limb[BIG_LIMBS];
+  int n;
+} big;
+
+static int big_bitlen(const big *x) {
+  int n = x->n;
+  while (n > 0 && !x->limb[n - 1])
+    --n;
+  if (!n) return 0;
+  int bits = 32 * (n - 1);
+  for (uint32_t top = x->limb[n - 1]; top; top >>= 1)
+    ++bits;
+  return bits;
+}
+
+static int big_bit(const big *x, int i) {
+  return i >= 0 && i / 32 < x->n ? (int)((x->limb[i / 32] >> (i % 32)) & 1u) : 0;
+}
+
+/* The 128 bits of x from bit `bitlen-1` down (zeros below bit 0). */
+static void big_top128(const big *x, int bitlen, pow10_entry *e) {
+  uint64_t hi = 0, lo = 0;
+  for (int i = bitlen - 1; i >= bitlen - 128; --i) {
+    hi = (hi << 1) | (lo >> 63);
+    lo = (lo << 1) | (uint64_t)big_bit(x, i);
+  }
+  e->hi = hi;
+  e->lo = lo;
+}
+
+static void build_pow10_table(void) {
+  /* q >= 0: the exact integer 10^q, truncated to its top 128 bits */
+  big x = {{1}, 1};
+  for (int q = 0; q <= POW10_MAX; ++q) {
+    if (q > 0) {
+      uint64_t carry = 0;
+      for (int k = 0; k < x.n; ++k) {
+        uint64_t t = (uint64_t)x.limb[k] * 10u + carry;
+        x.limb[k] = (uint32_t)t;
+        carry = t >> 32;
+      }
+      if (carry) x.limb[x.n++] = (uint32_t)carry;
+    }
+    int bits = big_bitlen(&x);
+    pow10_entry *e = &pow10_table[q - POW10_MIN];
+    big_top128(&x, bits, e);
+    e->b = bits - 128;
+  }
+  /* q < 0: floor(2^NEG_SHIFT / 10^-q) (repeated floor division by 10 is
+   * floor division by 10^-q), truncated to its top 128 bits */
+  memset(&x, 0, sizeof x);
+  x.n = NEG_SHIFT / 32 + 1;
+  x.limb[NEG_SHIFT / 32] = 1u << (NEG_SHIFT % 32);
+  for (int q = -1; q >= POW10_MIN; --q) {
+    uint64_t rem = 0;
+    for (int k = x.n - 1; k >= 0; --k) {
+      uint64_t t = (rem << 32) | x.limb[k];
+      x.limb[k] = (uint32_t)(t / 10u);
+      rem = t % 10u;
+    }
+    int bits = big_bitlen(&x);
+    pow10_entry *e = &pow10_table[q - POW10_MIN];
+    big_top128(&x, bits, e);
+    e->b = bits - 128 - NEG_SHIFT;
+  }
+}
+
+int hoc_io_pow10(int q, uint64_t *hi, uint64_t *lo, int *b) {
+  if (q < POW10_MIN || q > POW10_MAX) return 0;
+  pthread_once(&pow10_once, build_pow10_table);
+  const pow10_entry *e = &pow10_table[q - POW10_MIN];
+  *hi = e->hi;
+  *lo = e->lo;
+  *b = e->b;
+  return 1;
+}
+
+/* Exact "%.17g" ----------------------------------------------------------- */
+
+static const char digit_pairs[201] =
+    "00010203040506070809101112131415161718192021222324252627282930313233343536373839"
+    "40414243444546474849505152535455565758596061626364656667686970717273747576777879"
+    "8081828384858687888990919293949596979899";
+
+/* Decimal digits of x into out (no NUL); returns the length. */
+static size_t format_u64(uint64_t x, char *out) {
+  char tmp[20];
+  size_t n = 0;
+  while (x >= 100) {
+    unsigned r = (unsigned)(x % 100);
+    x /= 100;
+    tmp[n++] = digit_pairs[2 * r + 1];
+    tmp[n++] = digit_pairs[2 * r];
+  }
+  if (x >= 10) {
+    tmp[n++] = digit_pairs[2 * x + 1];
+    tmp[n++] = digit_pairs[2 * x];
+  } else {
+    tmp[n++] = (char)('0' + x);
+  }
+  for (size_t k = 0; k < n; ++k)
+    out[k] = tmp[n - 1 - k];
+  return n;
+}
+
+/* floor(e * log10(2)) (first guess; the caller corrects it). */
+static int floor_log10_pow2(int e) {
+  long t = (long)e * 78913L;
+  return (int)(t >= 0 ? t / 262144L : -((-t + 262143L) / 262144L));
+}
+
+#if defined(__SIZEOF_INT128__)
+__extension__ typedef unsigned __int128 u128;
+
+/* The 17 significant digits of v > 0 (finite), correctly rounded to
+ * nearest; *exp10 is the decimal exponent of the first digit. Returns 0 when
+ * v * 10^q is too close to a rounding tie to decide in 128-bit precision
+ * (the caller then asks printf). */
+static int digits17(double v, uint64_t *digits, int *exp10) {
+  uint64_t bits;
+  memcpy(&bits, &v, sizeof bits);
+  uint64_t frac = bits & ((UINT64_C(1) << 52) - 1);
+  int be = (int)((bits >> 52) & 0x7ff);
+  uint64_t m = be ? frac | (UINT64_C(1) << 52) : frac; /* v = m 2^e */
+  int e = be ? be - 1075 : -1074;
+  int msb = 63;
+  while (!(m >> msb))
+    --msb;
+  int d = floor_log10_pow2(e + msb); /* first guess of floor(log10 v) */
+  const uint64_t lo17 = UINT64_C(10000000000000000), hi17 = UINT64_C(100000000000000000);
+  for (int iter = 0; iter < 3; ++iter) {
+    uint64_t ph, pl;
+    int pb;
+    if (!hoc_io_pow10(16 - d, &ph, &pl, &pb)) return 0;
+    /* m * 10^q as 192 bits (w2 w1 w0), times 2^(e + pb) */
+    u128 p0 = (u128)m * pl, p1 = (u128)m * ph;
+    uint64_t w0 = (uint64_t)p0;
+    u128 mid = (p0 >> 64) + (uint64_t)p1;
+    uint64_t w1 = (uint64_t)mid;
+    uint64_t w2 = (uint64_t)(p1 >> 64) + (uint64_t)(mid >> 64);
+    /* X = v 10^q 2^64 = product >> s, with 3 <= s <= 64 */
+    int s = -(e + pb + 64);
+    if (s < 1 || s > 64) return 0;
+    u128 top = ((u128)w2 << 64) | w1;
+    u128 x = s == 64 ? top : (top << (64 - s)) | (w0 >> s);
+    uint64_t ip = (uint64_t)(x >> 64), fp = (uint64_t)x;
+    if (ip < lo17) {
+      --d;
+      continue;
+    }
+    if (ip >= hi17) {
+      ++d;
+      continue;
+    }
+    /* x is below the true value by less than 2 units of 2^-64 */
+    const uint64_t half = UINT64_C(1) << 63;
+    if (fp >= half - 16 && fp <= half + 16) return 0;
+    uint64_t n = ip + (fp > half);
+    if (n == hi17) {
+      n = lo17;
+      ++d;
+    }
+    *digits = n;
+    *exp10 = d;
+    return 1;
+  }
+  return 0;
+}
+#else
+static int digits17(double v, uint64_t *digits, int *exp10) {
+  (void)v, (void)digits, (void)exp10;
+  return 0;
+}
+#endif
+
+size_t hoc_io_format_double(double v, char *out) {
+  if (!isfinite(v) || v == 0) {
+    if (v == 0) {
+      size_t n = 0;
+      if (signbit(v)) out[n++] = '-';
+      out[n++] = '0';
+      out[n] = '\0';
+      return n;
+    }
+    return (size_t)snprintf(out, 32, "%.17g", v);
+  }
+  uint64_t n;
+  int d;
+  if (!digits17(fabs(v), &n, &d)) return (size_t)snprintf(out, 32, "%.17g", v);
+  char dig[17];
+  for (int k = 16; k >= 0; --k) {
+    dig[k] = (char)('0' + n % 10);
+    n /= 10;
+  }
+  int nd = 17; /* significant digits after dropping trailing zeros */
+  while (nd > 1 && dig[nd - 1] == '0')
+    --nd;
+  char *s = out;
+  if (v < 0) *s++ = '-';
+  if (d < -4 || d >= 17) { /* d.ddde+XX */
+    *s++ = dig[0];
+    if (nd > 1) {
+      *s++ = '.';
+      memcpy(s, dig + 1, (size_t)(nd - 1));
+      s += nd - 1;
+    }
+    *s++ = 'e';
+    *s++ = d < 0 ? '-' : '+';
+    int a = d < 0 ? -d : d;
+    if (a < 10) *s++ = '0';
+    s += format_u64((uint64_t)a, s);
+  } else if (d >= 0) { /* ddd.ddd */
+    memcpy(s, dig, (size_t)d + 1);
+    s += d + 1;
+    if (nd > d + 1) {
+      *s++ = '.';
+      memcpy(s, dig + d + 1, (size_t)(nd - d - 1));
+      s += nd - d - 1;
+    }
+  } else { /* 0.000ddd */
+    *s++ = '0';
+    *s++ = '.';
+    for (int k = 0; k < -d - 1; ++k)
+      *s++ = '0';
+    memcpy(s, dig, (size_t)nd);
+    s += nd;
+  }
+  *s = '\0';
+  return (size_t)(s - out);
+}
+
+/* Buffered output ------------------------------------------------------------ */
+
+enum { WBUF_SIZE = 1 << 18, WBUF_ITEM = 64 };
+
+typedef struct wbuf {
+  FILE *fp;
+  char *buf;
+  size_t len;
+  int err; /* errno of the first failed write, 0 if none */
+} wbuf;
+
+static void wb_flush(wbuf *w) {
+  if (w->len && !w->err && fwrite(w->buf, 1, w->len, w->fp) != w->len) w->err = errno ? errno : EIO;
+  w->len = 0;
+}
+
+/* Room for one item of at most WBUF_ITEM characters. */
+static inline char *wb_room(wbuf *w) {
+  if (WBUF_SIZE - w->len < WBUF_ITEM) wb_flush(w);
+  return w->buf + w->len;
+}
+
+static void wb_str(wbuf *w, const char *s) {
+  for (size_t n = strlen(s); n;) {
+    size_t k = n < WBUF_ITEM ? n : WBUF_ITEM;
+    memcpy(wb_room(w), s, k);
+    w->len += k;
+    s += k;
+    n -= k;
+  }
+}
+
+static inline void wb_char(wbuf *w, char c) {
+  *wb_room(w) = c;
+  ++w->len;
+}
+
+static inline void wb_u64(wbuf *w, uint64_t x) {
+  char *s = wb_room(w);
+  w->len += format_u64(x, s);
+}
+
+static inline void wb_int(wbuf *w, int x) {
+  char *s = wb_room(w);
+  if (x < 0) {
+    *s++ = '-';
+    ++w->len;
+  }
+  w->len += format_u64(x < 0 ? (uint64_t)0 - (uint64_t)(int64_t)x : (uint64_t)x, s);
+}
+
+static inline void wb_double(wbuf *w, double x) {
+  char *s = wb_room(w);
+  w->len += hoc_io_format_double(x, s);
+}
+
+/* Entities ------------------------------------------------------------------ */
+
+/* The entities of one dimension sorted by tag: tag[k] is the k-th smallest,
+ * index[k] its position in the caller's arrays. */
+typedef struct entity_list {
+  int n;
+  int *tag;   /* [n] */
+  int *index; /* [n] */
+} entity_list;
+
+static void entity_list_free(entity_list *l) {
+  free(l->tag);
+  free(l->index);
+  memset(l, 0, sizeof *l);
+}
+
+static hoc_status entity_list_build(entity_list *l, int n, const int *tags, const char *what) {
+  memset(l, 0, sizeof *l);
+  HOC_CHECK(n >= 0, HOC_ERR_ARGUMENT, "negative number of %ss (%d)", what, n);
+  HOC_CHECK(n == 0 || tags, HOC_ERR_ARGUMENT, "%s tags missing", what);
+  l->n = n;
+  l->tag = hoc_calloc((size_t)n + 1, sizeof *l->tag);
+  l->index = hoc_calloc((size_t)n + 1, sizeof *l->index);
+  int *tmp = hoc_calloc((size_t)n + 1, sizeof *tmp);
+  if (!l->tag || !l->index || !tmp) {
+    free(tmp);
+    entity_list_free(l);
+    return HOC_ERROR(HOC_ERR_MEMORY, "out of memory for %d %ss", n, what);
+  }
+  /* bottom-up merge sort of the positions by tag */
+  for (int k = 0; k < n; ++k)
+    l->index[k] = k;
+  for (int w = 1; w < n; w *= 2) {
+    for (int lo = 0; lo < n; lo += 2 * w) {
+      int mid = lo + w < n ? lo + w : n, hi = lo + 2 * w < n ? lo + 2 * w : n;
+      int a = lo, b = mid, o = lo;
+      while (a < mid && b < hi)
+        tmp[o++] = tags[l->index[b]] < tags[l->index[a]] ? l->index[b++] : l->index[a++];
+      while (a < mid)
+        tmp[o++] = l->index[a++];
+      while (b < hi)
+        tmp[o++] = l->index[b++];
+    }
+    memcpy(l->index, tmp, (size_t)n * sizeof *tmp);
+  }
+  free(tmp);
+  for (int k = 0; k < n; ++k)
+    l->tag[k] = tags[l->index[k]];
+  for (int k = 1; k < n; ++k)
+    if (l->tag[k] == l->tag[k - 1]) {
+      int dup = l->tag[k];
+      entity_list_free(l);
+      return HOC_ERROR(HOC_ERR_ARGUMENT, "%s %d is listed twice", what, dup);
+    }
+  return HOC_OK;
+}
+
+/* Rank of `tag` in the sorted list, -1 if absent. */
+static int entity_rank(const entity_list *l, int tag) {
+  int lo = 0, hi = l->n;
+  while (lo < hi) {
+    int mid = lo + (hi - lo) / 2;
+    if (l->tag[mid] < tag)
+      lo = mid + 1;
+    else
+      hi = mid;
+  }
+  return lo < l->n && l->tag[lo] == tag ? lo : -1;
+}
+
+static int all_finite(const double *x, size_t n) {
+  for (size_t k = 0; k < n; ++k)
+    if (!isfinite(x[k])) return 0;
+  return 1;
+}
+
+/* Checks of the bounding boxes and boundaries of one dimension's entities. */
+static hoc_status check_entities(int n, const int *tags, const double *bbox, const int *bnd_start,
+                                 const int *bnd, const char *what) {
+  if (!n) return HOC_OK;
+  HOC_CHECK(bbox && bnd_start, HOC_ERR_ARGUMENT, "%s bounding boxes or boundaries missing", what);
+  HOC_CHECK(bnd_start[0] >= 0, HOC_ERR_ARGUMENT, "%s boundary offsets start below 0", what);
+  for (int k = 0; k < n; ++k) {
+    HOC_CHECK(all_finite(bbox + 6 * (size_t)k, 6), HOC_ERR_ARGUMENT,
+              "%s %d has a non-finite bounding box: nothing written", what, tags[k]);
+    HOC_CHECK(bnd_start[k + 1] >= bnd_start[k], HOC_ERR_ARGUMENT,
+              "%s %d: boundary offsets decrease", what, tags[k]);
+  }
+  HOC_CHECK(bnd || bnd_start[n] == bnd_start[0], HOC_ERR_ARGUMENT, "%s boundaries missing", what);
+  return HOC_OK;
+}
+
+/* Node and element layout of the file --------------------------------------- */
+
+/* Where everything goes: blocks are numbered points (by tag), then curves,
+ * then surfaces, as in the file. */
+typedef struct layout {
+  entity_list ent[3];   /* points, curves, surfaces sorted by tag */
+  int n_blocks;         /* n_points + n_curves + n_surfaces */
+  size_t *node_order;   /* [n_nodes] caller's node index at each file position */
+  size_t *node_tag;     /* [n_nodes] file tag (1-based position) of each caller node */
+  size_t *block_start;  /* [n_blocks+1] first file position of each node block */
+  size_t *line_order;   /* [n_lines] caller's line at each file position */
+  size_t *tri_order;    /* [n_tris] */
+  size_t *lblock_start; /* [n_curves+1] */
+  size_t *tblock_start; /* [n_surfaces+1] */
+} layout;
+
+static void layout_free(layout *L) {
+  for (int k = 0; k < 3; ++k)
+    entity_list_free(&L->ent[k]);
+  free(L->node_order);
+  free(L->node_tag);
+  free(L->block_start);
+  free(L->line_order);
+  free(L->tri_order);
+  free(L->lblock_start);
+  free(L->tblock_start);
+  memset(L, 0, sizeof *L);
+}
+
+/* Stable counting sort of n items into nb buckets: start[nb+1] (zeroed on
+ * entry) receives the bucket offsets and order[n] the items bucket by bucket. */
+static void bucket_sort(size_t n, const int *bucket, int nb, size_t *start, size_t *order) {
+  for (size_t i = 0; i < n; ++i)
+    ++start[bucket[i] + 1];
+  for (int b = 0; b < nb; ++b)
+    start[b + 1] += start[b];
+  for (size_t i = 0; i < n; ++i)
+    order[start[bucket[i]]++] = i;
+  for (int b = nb; b > 0; --b)
+    start[b] = start[b - 1];
+  start[0] = 0;
+}
+
+static hoc_status layout_build(layout *L, const hoc_msh_write_data *d) {
+  static const char *dim_name[3] = {"point", "curve", "surface"};
+  const int counts[3] = {d->n_points, d->n_curves, d->n_surfaces};
+  const int *tags[3] = {d->point_tag, d->curve_tag, d->surface_tag};
+  for (int k = 0; k < 3; ++k)
+    HOC_TRY(entity_list_build(&L->ent[k], counts[k], tags[k], dim_name[k]));
+  L->n_blocks = counts[0] + counts[1] + counts[2];
+  const int base[3] = {0, counts[0], counts[0] + counts[1]};
+  const int np = (d->order + 1) * (d->order + 2) / 2, nl = d->order + 1;
+  size_t nn = d->n_nodes;
+  int *bucket = NULL;
+  hoc_status status = HOC_OK;
+  size_t nmax = nn > d->n_tris ? nn : d->n_tris;
+  if (d->n_lines > nmax) nmax = d->n_lines;
+  HOC_ALLOC_GOTO(bucket, nmax + 1, done);
+  /* nodes: the block of each, checking positions and parameters */
+  for (size_t i = 0; i < nn; ++i) {
+    int dim = d->node_dim[i];
+    if (dim < 0 || dim > 2) {
+      status =
+          HOC_ERROR(HOC_ERR_ARGUMENT, "node %zu has dimension %d (0, 1 or 2 expected)", i, dim);
+      goto done;
+    }
+    int r = entity_rank(&L->ent[dim], d->node_entity_tag[i]);
+    if (r < 0) {
+      status =
+          HOC_ERROR(HOC_ERR_ARGUMENT, "node %zu lies on %s %d, which is not in the entity list", i,
+                    dim_name[dim], d->node_entity_tag[i]);
+      goto done;
+    }
+    if (!all_finite(d->xyz + 3 * i, 3) ||
+        (d->param && !all_finite(d->param + 2 * i, (size_t)dim))) {
+      status = HOC_ERROR(HOC_ERR_ARGUMENT,
+                         "node %zu has a non-finite coordinate or parameter: nothing written", i);
+      goto done;
+    }
+    bucket[i] = base[dim] + r;
+  }
+  HOC_ALLOC_GOTO(L->node_order, nn + 1, done);
+  HOC_ALLOC_GOTO(L->node_tag, nn + 1, done);
+  HOC_ALLOC_GOTO(L->block_start, (size_t)L->n_blocks + 1, done);
+  bucket_sort(nn, bucket, L->n_blocks, L->block_start, L->node_order);
+  for (size_t k = 0; k < nn; ++k)
+    L->node_tag[L->node_order[k]] = k + 1;
+  /* lines: one block per curve */
+  for (size_t e = 0; e < d->n_lines; ++e) {
+    int r = entity_rank(&L->ent[1], d->line_curve_tag[e]);
+    if (r < 0) {
+      status =
+          HOC_ERROR(HOC_ERR_ARGUMENT, "line %zu lies on curve %d, which is not in the entity list",
+                    e, d->line_curve_tag[e]);
+      goto done;
+    }
+    for (int k = 0; k < nl; ++k)
+      if (d->line_nodes[e * (size_t)nl + (size_t)k] >= nn) {
+        status = HOC_ERROR(HOC_ERR_ARGUMENT, "line %zu uses node %zu of %zu", e,
+                           d->line_nodes[e * (size_t)nl + (size_t)k], nn);
+        goto done;
+      }
+    bucket[e] = r;
+  }
+  HOC_ALLOC_GOTO(L->line_order, d->n_lines + 1, done);
+  HOC_ALLOC_GOTO(L->lblock_start, (size_t)counts[1] + 1, done);
+  bucket_sort(d->n_lines, bucket, counts[1], L->lblock_start, L->line_order);
+  /* triangles: one block per surface */
+  for (size_t e = 0; e < d->n_tris; ++e) {
+    int r = entity_rank(&L->ent[2], d->tri_surface_tag[e]);
+    if (r < 0) {
+      status = HOC_ERROR(HOC_ERR_ARGUMENT,
+                         "triangle %zu lies on surface %d, which is not in the entity list", e,
+                         d->tri_surface_tag[e]);
+      goto done;
+    }
+    for (int k = 0; k < np; ++k)
+      if (d->tri_nodes[e * (size_t)np + (size_t)k] >= nn) {
+        status = HOC_ERROR(HOC_ERR_ARGUMENT, "triangle %zu uses node %zu of %zu", e,
+                           d->tri_nodes[e * (size_t)np + (size_t)k], nn);
+        goto done;
+      }
+    bucket[e] = r;
+  }
+  HOC_ALLOC_GOTO(L->tri_order, d->n_tris + 1, done);
+  HOC_ALLOC_GOTO(L->tblock_start, (size_t)counts[2] + 1, done);
+  bucket_sort(d->n_tris, bucket, counts[2], L->tblock_start, L->tri_order);
+done:
+  free(bucket);
+  return status;
+}
+
+/* The file ------------------------------------------------------------------------ */
+
+static void write_bbox_and_boundary(wbuf *w, const double *bbox, const int *bnd_start,
+                                    const int *bnd, int k) {
+  for (int c = 0; c < 6; ++c) {
+    wb_char(w, ' ');
+    wb_double(w, bbox[6 * (size_t)k + (size_t)c]);
+  }
+  wb_str(w, " 0 "); /* no physical tags */
+  wb_int(w, bnd_start[k + 1] - bnd_start[k]);
+  for (int j = bnd_start[k]; j < bnd_start[k + 1]; ++j) {
+    wb_char(w, ' ');
+    wb_int(w, bnd[j]);
+  }
+  wb_char(w, '\n');
+}
+
+static void write_entities(wbuf *w, const hoc_msh_write_data *d, const layout *L) {
+  wb_str(w, "$Entities\n");
+  wb_int(w, d->n_points);
+  wb_char(w, ' ');
+  wb_int(w, d->n_curves);
+  wb_char(w, ' ');
+  wb_int(w, d->n_surfaces);
+  wb_str(w, " 0\n");
+  for (int r = 0; r < d->n_points; ++r) { /* tag x y z 0 */
+    int k = L->ent[0].index[r];
+    wb_int(w, d->point_tag[k]);
+    for (int c = 0; c < 3; ++c) {
+      wb_char(w, ' ');
+      wb_double(w, d->point_xyz[3 * (size_t)k + (size_t)c]);
+    }
+    wb_str(w, " 0\n");
+  }
+  for (int r = 0; r < d->n_curves; ++r) {
+    int k = L->ent[1].index[r];
+    wb_int(w, d->curve_tag[k]);
+    write_bbox_and_boundary(w, d->curve_bbox, d->curve_bnd_start, d->curve_bnd, k);
+  }
+  for (int r = 0; r < d->n_surfaces; ++r) {
+    int k = L->ent[2].index[r];
+    wb_int(w, d->surface_tag[k]);
+    write_bbox_and_boundary(w, d->surface_bbox, d->surface_bnd_start, d->surface_bnd, k);
+  }
+  wb_str(w, "$EndEntities\n");
+}
+
+static void write_nodes(wbuf *w, const hoc_msh_write_data *d, const layout *L) {
+  size_t nn = d->n_nodes;
+  int used = 0;
+  for (int b = 0; b < L->n_blocks; ++b)
+    used += L->block_start[b + 1] > L->block_start[b];
+  wb_str(w, "$Nodes\n");
+  wb_int(w, used);
+  wb_char(w, ' ');
+  wb_u64(w, nn);
+  wb_str(w, nn ? " 1 " : " 0 ");
+  wb_u64(w, nn);
+  wb_char(w, '\n');
+  int b = 0;
+  for (int dim = 0; dim < 3; ++dim)
+    for (int r = 0; r < L->ent[dim].n; ++r, ++b) {
+      size_t first = L->block_start[b], last = L->block_start[b + 1];
+      if (first == last) continue;
+      /* dim tag parametric count, then the tags, then x y z [t | u v] */
+      wb_int(w, dim);
+      wb_char(w, ' ');
+      wb_int(w, L->ent[dim].tag[r]);
+      wb_str(w, d->param ? " 1 " : " 0 ");
+      wb_u64(w, last - first);
+      wb_char(w, '\n');
+      for (size_t k = first; k < last; ++k) {
+        wb_u64(w, k + 1);
+        wb_char(w, '\n');
+      }
+      for (size_t k = first; k < last; ++k) {
+        size_t i = L->node_order[k];
+        const double *x = d->xyz + 3 * i; /* [3] */
+        wb_double(w, x[0]);
+        wb_char(w, ' ');
+        wb_double(w, x[1]);
+        wb_char(w, ' ');
+        wb_double(w, x[2]);
+        if (d->param)
+          for (int c = 0; c < dim; ++c) {
+            wb_char(w, ' ');
+            wb_double(w, d->param[2 * i + (size_t)c]);
+          }
+        wb_char(w, '\n');
       }
     }
-    memcpy(order, tmp, n * sizeof *order);
+  wb_str(w, "$EndNodes\n");
+}
+
+/* One element block per entity: lines on curves, triangles on surfaces. */
+static void write_element_blocks(wbuf *w, const layout *L, const entity_list *ents, int dim,
+                                 int type, const size_t *start, const size_t *order,
+                                 const size_t *nodes, int nper, size_t *next_tag) {
+  for (int r = 0; r < ents->n; ++r) {
+    if (start[r + 1] == start[r]) continue;
+    wb_int(w, dim);
+    wb_char(w, ' ');
+    wb_int(w, ents->tag[r]);
+    wb_char(w, ' ');
+    wb_int(w, type);
+    wb_char(w, ' ');
+    wb_u64(w, start[r + 1] - start[r]);
+    wb_char(w, '\n');
+    for (size_t k = start[r]; k < start[r + 1]; ++k) {
+      const size_t *en = nodes + order[k] * (size_t)nper; /* [nper] caller's node indices */
+      wb_u64(w, (*next_tag)++);
+      for (int j = 0; j < nper; ++j) {
+        wb_char(w, ' ');
+        wb_u64(w, L->node_tag[en[j]]);
+      }
+      wb_char(w, '\n');
+    }
   }
+}
+
+static void write_elements(wbuf *w, const hoc_msh_write_data *d, const layout *L) {
+  int p = d->order, np = (p + 1) * (p + 2) / 2;
+  size_t ne = d->n_lines + d->n_tris;
+  int used = 0;
+  for (int r = 0; r < d->n_curves; ++r)
+    used += L->lblock_start[r + 1] > L->lblock_start[r];
+  for (int r = 0; r < d->n_surfaces; ++r)
+    used += L->tblock_start[r + 1] > L->tblock_start[r];
+  wb_str(w, "$Elements\n");
+  wb_int(w, used);
+  wb_char(w, ' ');
+  wb_u64(w, ne);
+  wb_str(w, ne ? " 1 " : " 0 ");
+  wb_u64(w, ne);
+  wb_char(w, '\n');
+  size_t next_tag = 1;
+  write_element_blocks(w, L, &L->ent[1], 1, hoc_msh_line_type(p), L->lblock_start, L->line_order,
+                       d->line_nodes, p + 1, &next_tag);
+  write_element_blocks(w, L, &L->ent[2], 2, hoc_msh_triangle_type(p), L->tblock_start, L->tri_order,
+                       d->tri_nodes, np, &next_tag);
+  wb_str(w, "$EndElements\n");
 }
 
 hoc_status hoc_msh_write(const char *path, const hoc_msh_write_data *d) {
-  HOC_CHECK(d && path, HOC_ERR_ARGUMENT, "NULL argument");
-  int p = d->order, np = (p + 1) * (p + 2) / 2;
-  HOC_CHECK(hoc_msh_triangle_type(p), HOC_ERR_UNSUPPORTED,
-            "gmsh's MSH format has no triangle of order %d (at most 10)", p);
-  for (size_t i = 0; i < d->n_nodes; ++i)
-    HOC_CHECK(isfinite(d->xyz[3 * i]) && isfinite(d->xyz[3 * i + 1]) && isfinite(d->xyz[3 * i + 2]) &&
-                  isfinite(d->param[2 * i]) && isfinite(d->param[2 * i + 1]),
-              HOC_ERR_ARGUMENT, "node %zu has a non-finite coordinate: nothing written", i + 1);
-  size_t nn = d->n_nodes;
-  size_t *order = hoc_calloc(nn + 1, sizeof *order), *tmp = hoc_calloc(nn + 1, sizeof *tmp);
-  size_t *tag = hoc_calloc(nn + 1, sizeof *tag);
-  size_t ne = d->n_tris + d->n_lines;
-  size_t *eorder = hoc_calloc(ne + 1, sizeof *eorder), *etmp = hoc_calloc(ne + 1, sizeof *etmp);
-  int *ek1 = hoc_calloc(ne + 1, sizeof *ek1), *ek2 = hoc_calloc(ne + 1, sizeof *ek2);
+  HOC_CHECK(path && path[0], HOC_ERR_ARGUMENT, "no output file name given");
+  HOC_CHECK(d, HOC_ERR_ARGUMENT, "no mesh given to write '%s'", path);
+  HOC_CHECK(d->order >= 1, HOC_ERR_ARGUMENT, "order %d: at least 1 expected", d->order);
+  HOC_CHECK(d->order <= 10, HOC_ERR_UNSUPPORTED,
+            "cannot write '%s': gmsh's MSH format has no triangle of order %d (at most 10)", path,
+            d->order);
+  HOC_CHECK(!d->n_nodes || (d->xyz && d->node_dim && d->node_entity_tag), HOC_ERR_ARGUMENT,
+            "node arrays missing");
+  HOC_CHECK(!d->n_tris || (d->tri_nodes && d->tri_surface_tag), HOC_ERR_ARGUMENT,
+            "triangle arrays missing");
+  HOC_CHECK(!d->n_lines || (d->line_nodes && d->line_curve_tag), HOC_ERR_ARGUMENT,
+            "line arrays missing");
+  HOC_CHECK(!d->n_points || d->point_xyz, HOC_ERR_ARGUMENT, "point coordinates missing");
+  for (int k = 0; k < d->n_points; ++k)
+    HOC_CHECK(all_finite(d->point_xyz + 3 * (size_t)k, 3), HOC_ERR_ARGUMENT,
+              "point %d has a non-finite coordinate: nothing written",
+              d->point_tag ? d->point_tag[k] : k);
+  HOC_TRY(check_entities(d->n_curves, d->curve_tag, d->curve_bbox, d->curve_bnd_start, d->curve_bnd,
+                         "curve"));
+  HOC_TRY(check_entities(d->n_surfaces, d->surface_tag, d->surface_bbox, d->surface_bnd_start,
+                         d->surface_bnd, "surface"));
+  layout L = {0};
   hoc_outfile out = {0};
+  wbuf w = {0};
   hoc_status status = HOC_OK;
-  if (!order || !tmp || !tag || !eorder || !etmp || !ek1 || !ek2) {
-    status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory writing '%s'", path);
+  HOC_TRY_GOTO(layout_build(&L, d), done);
+  HOC_ALLOC_GOTO(w.buf, WBUF_SIZE, done);
+  HOC_TRY_GOTO(hoc_outfile_open(&out, path), done);
+  w.fp = out.fp;
+  wb_str(&w, "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n");
+  write_entities(&w, d, &L);
+  write_nodes(&w, d, &L);
+  write_elements(&w, d, &L);
+  wb_flush(&w);
+  if (w.err) {
+    status = HOC_ERROR(HOC_ERR_IO, "cannot write '%s': %s", path, strerror(w.err));
     goto done;
   }
-  sort_by_keys(nn, d->node_dim, d->node_entity_tag, order, tmp);
-  for (size_t k = 0; k < nn; ++k) tag[order[k]] = k + 1;
-  /* elements: lines (dim 1) then triangles (dim 2), by entity */
-  for (size_t e = 0; e < d->n_lines; ++e) ek1[e] = 1, ek2[e] = d->line_curve_tag[e];
-  for (size_t e = 0; e < d->n_tris; ++e) ek1[d->n_lines + e] = 2, ek2[d->n_lines + e] = d->tri_surface_tag[e];
-  sort_by_keys(ne, ek1, ek2, eorder, etmp);
-
-  HOC_TRY_GOTO(hoc_outfile_open(&out, path), done);
-  FILE *fp = out.fp;
-  fprintf(fp, "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Entities\n%d %d %d 0\n", d->n_points,
-          d->n_curves, d->n_surfaces);
-  for (int i = 0; i < d->n_points; ++i)
-    fprintf(fp, "%d %.17g %.17g %.17g 0\n", d->point_tag[i], d->point_xyz[3 * i],
-            d->point_xyz[3 * i + 1], d->point_xyz[3 * i + 2]);
-  for (int i = 0; i < d->n_curves; ++i) {
-    fprintf(fp, "%d ", d->curve_tag[i]);
-    put_bbox(fp, d->curve_bbox + 6 * i);
-    int a = d->curve_bnd_start[i], b = d->curve_bnd_start[i + 1];
-    fprintf(fp, " 0 %d", b - a);
-    for (int k = a; k < b; ++k) fprintf(fp, " %d", d->curve_bnd[k]);
-    fputc('\n', fp);
-  }
-  for (int i = 0; i < d->n_surfaces; ++i) {
-    fprintf(fp, "%d ", d->surface_tag[i]);
-    put_bbox(fp, d->surface_bbox + 6 * i);
-    int a = d->surface_bnd_start[i], b = d->surface_bnd_start[i + 1];
-    fprintf(fp, " 0 %d", b - a);
-    for (int k = a; k < b; ++k) fprintf(fp, " %d", d->surface_bnd[k]);
-    fputc('\n', fp);
-  }
-  fprintf(fp, "$EndEntities\n$Nodes\n");
-  size_t nblocks = 0;
-  for (size_t k = 0; k < nn; ++k)
-    if (k == 0 || d->node_dim[order[k]] != d->node_dim[order[k - 1]] ||
-        d->node_entity_tag[order[k]] != d->node_entity_tag[order[k - 1]])
-      ++nblocks;
-  fprintf(fp, "%zu %zu %zu %zu\n", nblocks, nn, nn ? (size_t)1 : 0, nn);
-  for (size_t a = 0; a < nn;) {
-    size_t b = a;
-    int dim = d->node_dim[order[a]], etag = d->node_entity_tag[order[a]];
-    while (b < nn && d->node_dim[order[b]] == dim && d->node_entity_tag[order[b]] == etag) ++b;
-    fprintf(fp, "%d %d %d %zu\n", dim, etag, dim > 0, b - a);
-    for (size_t k = a; k < b; ++k) fprintf(fp, "%zu\n", k + 1);
-    for (size_t k = a; k < b; ++k) {
-      size_t i = order[k];
-      const double *x = d->xyz + 3 * i, *u = d->param + 2 * i;
-      if (dim == 2) fprintf(fp, "%.17g %.17g %.17g %.17g %.17g\n", x[0], x[1], x[2], u[0], u[1]);
-      else if (dim == 1) fprintf(fp, "%.17g %.17g %.17g %.17g\n", x[0], x[1], x[2], u[0]);
-      else fprintf(fp, "%.17g %.17g %.17g\n", x[0], x[1], x[2]);
-    }
-    a = b;
-  }
-  fprintf(fp, "$EndNodes\n$Elements\n");
-  size_t eblocks = 0;
-  for (size_t k = 0; k < ne; ++k)
-    if (k == 0 || ek1[eorder[k]] != ek1[eorder[k - 1]] || ek2[eorder[k]] != ek2[eorder[k - 1]]) ++eblocks;
-  fprintf(fp, "%zu %zu %zu %zu\n", eblocks, ne, ne ? (size_t)1 : 0, ne);
-  for (size_t a = 0; a < ne;) {
-    size_t b = a;
-    int dim = ek1[eorder[a]], etag = ek2[eorder[a]];
-    while (b < ne && ek1[eorder[b]] == dim && ek2[eorder[b]] == etag) ++b;
-    fprintf(fp, "%d %d %d %zu\n", dim, etag, dim == 2 ? hoc_msh_triangle_type(p) : hoc_msh_line_type(p),
-            b - a);
-    for (size_t k = a; k < b; ++k) {
-      size_t e = eorder[k];
-      const size_t *cn = dim == 2 ? d->tri_nodes + (e - d->n_lines) * (size_t)np
-                                  : d->line_nodes + e * (size_t)(p + 1);
-      int cnt = dim == 2 ? np : p + 1;
-      fprintf(fp, "%zu", k + 1);
-      for (int j = 0; j < cnt; ++j) fprintf(fp, " %zu", tag[cn[j]]);
-      fputc('\n', fp);
-    }
-    a = b;
-  }
-  fprintf(fp, "$EndElements\n");
   status = hoc_outfile_commit(&out);
 done:
   hoc_outfile_abort(&out);
-  free(order);
-  free(tmp);
-  free(tag);
-  free(eorder);
-  free(etmp);
-  free(ek1);
-  free(ek2);
+  free(w.buf);
+  layout_free(&L);
   return status;
 }
