@@ -174,7 +174,11 @@ hoc_nodeset hoc_mesh_nodeset(const hoc_mesh *mesh);
 int hoc_mesh_num_failed_faces(const hoc_mesh *mesh);
 int hoc_mesh_failed_face_tag(const hoc_mesh *mesh, int i);
 /** Largest distance from a node to its CAD entity, recomputed from the
- *  nodes' parametric coordinates (a self-check of the mesh). */
+ *  nodes' parametric coordinates (a self-check of the mesh). Zero for
+ *  meshes hocad makes; a mesh read from a file keeps its nodes where the
+ *  file puts them (measured as written), which may be off the surface
+ *  (gmsh leaves nodes off where its projection fails); hoc_mesh_optimize
+ *  puts every node back on the CAD first. */
 hoc_status hoc_mesh_max_cad_distance(const hoc_mesh *mesh, double *distance);
 
 /* ------------------------------------------------------------------------ */

@@ -706,7 +706,13 @@ static int cmd_quality(int argc, char **argv) {
   }
   if ((code = measure_stage(&o, &r, "input", mesh, now() - t0, q))) goto done;
   if (!o.quiet) {
-    printf("mesh %s on %s: %zu nodes\n", o.mesh_in, o.model, hoc_mesh_num_nodes(mesh));
+    double off = 0, bb[6];
+    hoc_mesh_max_cad_distance(mesh, &off);
+    hoc_model_bbox(model, bb);
+    double diag = sqrt((bb[3] - bb[0]) * (bb[3] - bb[0]) + (bb[4] - bb[1]) * (bb[4] - bb[1]) +
+                       (bb[5] - bb[2]) * (bb[5] - bb[2]));
+    printf("mesh %s on %s: %zu nodes, farthest node %.3g from the CAD (%.2g of the model's size)\n",
+           o.mesh_in, o.model, hoc_mesh_num_nodes(mesh), off, diag > 0 ? off / diag : 0);
     print_table(&r);
   }
   if (o.vtu) {

@@ -89,6 +89,30 @@ static double vertex_t_on_curve(const hoc_cad_curve *c, int vertex, double near,
   return NAN;
 }
 
+/* Locate a point on face f without a usable guess: the kernel's projection
+ * (which may fail on hard B-splines), then Newton from a 5 x 5 grid of
+ * starting points over the face's bounds; the best result wins. */
+static hoc_status locate_on_face(const hoc_model *model, int f, const double *x, double *uv,
+                                 double *dist) {
+  const hoc_cad_face *face = &model->faces[f];
+  double best = INFINITY, p[2], d;
+  if (model->ops->face_project(model->ctx, face, 1, x, p) == HOC_OK && isfinite(p[0]) &&
+      isfinite(p[1])) {
+    HOC_TRY(hoc_cad_face_invert(model, f, x, p, &d));
+    if (d < best) best = d, uv[0] = p[0], uv[1] = p[1];
+  }
+  hoc_error_clear();
+  for (int i = 0; i < 5 && best > 1e-9 * model->diagonal; ++i)
+    for (int j = 0; j < 5; ++j) {
+      p[0] = face->lo[0] + (face->hi[0] - face->lo[0]) * (i + 0.5) / 5;
+      p[1] = face->lo[1] + (face->hi[1] - face->lo[1]) * (j + 0.5) / 5;
+      HOC_TRY(hoc_cad_face_invert(model, f, x, p, &d));
+      if (d < best) best = d, uv[0] = p[0], uv[1] = p[1];
+    }
+  *dist = best;
+  return HOC_OK;
+}
+
 /* Parameters of nodes the source gave none: curve nodes along lines and by
  * projection; face nodes from neighbours inside their elements. */
 static hoc_status recover_params(hoc_mesh *m, const hoc_mesh_source *src,
@@ -179,10 +203,8 @@ static hoc_status recover_params(hoc_mesh *m, const hoc_mesh_source *src,
       while (!(m->dim[scan] == HOC_ON_FACE && !known[scan])) ++scan;
       size_t i = scan;
       int f = m->entity[i];
-      double uv[2], d;
-      HOC_TRY_GOTO(model->ops->face_project(model->ctx, &model->faces[f], 1, src->xyz + 3 * i, uv),
-                   done);
-      HOC_TRY_GOTO(hoc_cad_face_invert(model, f, src->xyz + 3 * i, uv, &d), done);
+      double uv[2] = {0, 0}, d;
+      HOC_TRY_GOTO(locate_on_face(model, f, src->xyz + 3 * i, uv, &d), done);
       if (!(d <= tol)) {
         status = HOC_ERROR(HOC_ERR_MISMATCH,
                            "node %zu is %.3g away from face %d: the mesh does not match this "
@@ -204,17 +226,17 @@ static hoc_status recover_params(hoc_mesh *m, const hoc_mesh_source *src,
     size_t e = queue[head++];
     const size_t *cn = src->conn + e * (size_t)np;
     int f = src->elem_face[e];
-    double guess[2] = {0, 0};
-    for (int k = 0; k < np; ++k)
-      if (m->dim[cn[k]] == HOC_ON_FACE && known[cn[k]]) {
-        memcpy(guess, m->param + 2 * cn[k], sizeof guess);
-        break;
-      }
     for (int k = 0; k < np; ++k) {
       size_t i = cn[k];
       if (m->dim[i] != HOC_ON_FACE || known[i]) continue;
-      double uv[2] = {guess[0], guess[1]}, d;
-      HOC_TRY_GOTO(hoc_cad_face_invert(model, f, src->xyz + 3 * i, uv, &d), done);
+      /* Newton from each located node of the element in turn */
+      double uv[2] = {0, 0}, d = INFINITY;
+      for (int g = 0; g < np && !(d <= tol); ++g) {
+        size_t j = cn[g];
+        if (m->dim[j] != HOC_ON_FACE || !known[j] || m->entity[j] != f) continue;
+        memcpy(uv, m->param + 2 * j, sizeof uv);
+        HOC_TRY_GOTO(hoc_cad_face_invert(model, f, src->xyz + 3 * i, uv, &d), done);
+      }
       if (!(d <= tol)) continue; /* another element may bring a better guess */
       hoc_cad_face_wrap(&model->faces[f], uv);
       memcpy(m->param + 2 * i, uv, sizeof uv);
@@ -729,6 +751,7 @@ hoc_status hoc_mesh_assemble(hoc_model *model, const hoc_mesh_source *src, doubl
   if (given) {
     for (size_t i = 0; i < src->n_nodes; ++i) {
       double d = dist3(given + 3 * i, m->xyz + 3 * i);
+      if (d > m->off_cad) m->off_cad = d;
       if (!(d <= tol)) {
         const char *what = m->dim[i] == HOC_ON_FACE ? "face" : m->dim[i] == HOC_ON_CURVE ? "curve" : "vertex";
         int tag = m->dim[i] == HOC_ON_FACE     ? model->faces[m->entity[i]].tag
@@ -742,6 +765,7 @@ hoc_status hoc_mesh_assemble(hoc_model *model, const hoc_mesh_source *src, doubl
       }
     }
   }
+  if (given && src->keep_xyz) memcpy(m->xyz, given, 3 * src->n_nodes * sizeof *given);
   HOC_TRY_GOTO(build_slots(m), fail);
   HOC_TRY_GOTO(slot_params(m, src, tol), fail);
   element_params(m);

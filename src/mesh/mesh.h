@@ -48,6 +48,8 @@ struct hoc_mesh {
                                opposite, 0 if the face has no elements */
   int n_failed_faces;
   int *failed_faces;        /* [n_failed_faces] face indices the mesher could not mesh */
+  double off_cad;           /* largest distance of a given node position from its entity
+                               (nonzero only for meshes kept as read) */
 };
 
 /** Input of hoc_mesh_assemble: a triangulation with classified nodes, as
@@ -68,6 +70,8 @@ typedef struct hoc_mesh_source {
   const size_t *line_conn;   /* [n_lines][p+1] */
   const int *line_curve;     /* [n_lines] */
   const size_t *node_tag;    /* [n] node labels for messages (file tags), or NULL */
+  int keep_xyz;              /* keep the given positions (a file measured as written);
+                                otherwise positions are recomputed from the parameters */
 } hoc_mesh_source;
 
 /** Build a mesh from a triangulation: locate nodes without parameters on

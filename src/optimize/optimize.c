@@ -1331,7 +1331,11 @@ hoc_status hoc_mesh_optimize(hoc_mesh *mesh, const hoc_optimize_options *options
   opt ctx;
   scratch *scr = NULL;
   int nthreads = omp_get_max_threads();
-  hoc_status status = setup(&ctx, mesh, o.measure, o.fix_curves);
+  /* every node on the CAD from the start (a mesh read as written may have
+   * nodes off the surface) */
+  hoc_status status = hoc_mesh_update_xyz(mesh);
+  if (status == HOC_OK) mesh->off_cad = 0;
+  if (status == HOC_OK) status = setup(&ctx, mesh, o.measure, o.fix_curves);
   if (status == HOC_OK) status = eval_all(&ctx);
   if (status == HOC_OK) status = scratch_alloc(&ctx, nthreads, &scr);
   if (status != HOC_OK) {
