@@ -268,6 +268,48 @@ hoc_status hoc_mesh_check_gradient(hoc_mesh *mesh, hoc_measure measure, int fix_
                                    int samples, double *max_rel_error);
 
 /* ------------------------------------------------------------------------ */
+/* Pictures                                                                 */
+
+/** Options of the pictures (PNG, drawn in software: no display, no GPU). */
+typedef struct hoc_picture_options {
+  int width, height; /**< whole picture in pixels (0: 1600 x 1200) */
+  double view[3];    /**< direction from the model to the eye ((0,0,0): isometric (1,1,1)) */
+  int zoom_worst;    /**< frame the worst elements of the first mesh instead of everything */
+  int no_edges;      /**< do not draw the element edges */
+  int transparent;   /**< transparent background instead of white */
+} hoc_picture_options;
+
+/** Fill options with defaults (1600 x 1200, isometric, edges, white). */
+void hoc_picture_options_default(hoc_picture_options *options);
+
+/** Draw `n` meshes side by side in one PNG with the same camera (so stages
+ *  compare), curved elements tessellated for their order, faces coloured by
+ *  q with a colour bar, tangled elements (q = 0) in magenta. Written
+ *  atomically.
+ *  @param[in] meshes   [n] meshes (1..16)
+ *  @param[in] quality  [n] per-element q of each mesh (from hoc_mesh_measure),
+ *                      or NULL (grey)
+ *  @param[in] titles   [n] titles above the views, or NULL */
+hoc_status hoc_picture_png(const char *path, int n, const hoc_mesh *const *meshes,
+                           const double *const *quality, const char *const *titles,
+                           const hoc_picture_options *options);
+
+/** Histogram of q per mesh (bins of 0.05, tangled elements counted apart),
+ *  one panel per mesh side by side, as a PNG. quality[i] must not be NULL. */
+hoc_status hoc_histogram_png(const char *path, int n, const hoc_mesh *const *meshes,
+                             const double *const *quality, const char *const *titles,
+                             const hoc_picture_options *options);
+
+/** Picture (and histogram, if histogram_path is not NULL) of a .msh file
+ *  without its CAD model. Without the CAD normals, Definition 2 measures
+ *  each element against the normal of the plane through its three corners
+ *  (equal to the CAD's verdict on all but strongly curved elements).
+ *  @param[out] stats  statistics of that measure, or NULL */
+hoc_status hoc_picture_msh_file(const char *msh_path, hoc_measure measure, const char *png_path,
+                                const char *histogram_path, const hoc_picture_options *options,
+                                hoc_quality_stats *stats);
+
+/* ------------------------------------------------------------------------ */
 /* Files                                                                    */
 
 /** Write `size` bytes to `path` atomically (temporary file in the same

@@ -6,7 +6,7 @@ set -euo pipefail
 
 packages=(build-essential cmake libgmsh-dev libpng-dev zlib1g-dev)
 if [ "${1:-}" = "--test" ]; then
-  packages+=(valgrind clang libclang-rt-14-dev)
+  packages+=(valgrind clang libclang-rt-14-dev pngcheck)
 fi
 
 missing=()

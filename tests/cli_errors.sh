@@ -70,6 +70,16 @@ expect 2 "quality: mesh is garbage" -- quality "$model" garbage.step
 printf '$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 2 1 2\n2 999 0 2\n1\n2\n0 0 0\n1 1 1\n$EndNodes\n$Elements\n1 1 1 1\n2 999 2 1\n1 1 2 1\n$EndElements\n' > wrongmodel.msh
 expect 2 "quality: mesh not on this model" -- quality "$model" wrongmodel.msh
 expect 1 "optimize without output" -- optimize "$model" wrongmodel.msh
+expect 1 "render without output" -- render wrongmodel.msh
+expect 1 "render: bad view" -- render wrongmodel.msh -o x.png --view 0,0,0
+expect 1 "render: view not numbers" -- render wrongmodel.msh -o x.png --view up
+expect 1 "render: bad size" -- render wrongmodel.msh -o x.png --size 10x10
+expect 1 "render: size not WxH" -- render wrongmodel.msh -o x.png --size 800
+expect 1 "mesh: bad picture size" -- mesh "$model" --png x.png --png-size 99999x100
+expect 2 "render: missing mesh" -- render nosuch.msh -o x.png
+expect 2 "render: garbage mesh" -- render garbage.step -o x.png
+expect 2 "render: mesh without triangles" -- render empty.step -o x.png
+expect 2 "render: mesh not on this model" -- render wrongmodel.msh --model "$model" -o x.png
 
 # a previous output survives a failing run
 echo "previous" > keep.msh
@@ -77,7 +87,7 @@ echo "previous" > keep.msh
 if [ "$(cat keep.msh)" = "previous" ]; then pass=$((pass + 1)); else fail=$((fail + 1)); echo "FAIL: previous output clobbered" >&2; fi
 
 # help and version
-for args in "--help" "mesh --help" "quality --help" "optimize --help" "--version"; do
+for args in "--help" "mesh --help" "quality --help" "optimize --help" "render --help" "--version"; do
   if $hocad $args >/dev/null 2>&1; then pass=$((pass + 1)); else fail=$((fail + 1)); echo "FAIL: hocad $args" >&2; fi
 done
 

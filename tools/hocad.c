@@ -70,9 +70,10 @@ static double now(void) {
 /* Options ----------------------------------------------------------------- */
 
 typedef struct options {
-  const char *model, *mesh_in, *out, *vtu, *json, *linear;
+  const char *model, *mesh_in, *out, *vtu, *json, *linear, *png, *histogram;
   int order, threads, quiet, no_output, optimize, have_order, fix_curves, max_iterations,
       check_gradient;
+  hoc_picture_options picture;
   double size, size_min, curvature;
   hoc_nodeset nodes;
   hoc_measure measure;
@@ -102,6 +103,54 @@ static int parse_positive(const char *opt, const char *s, double *out) {
   return 1;
 }
 
+/* --view iso|front|top|side|back|bottom|x,y,z: direction towards the eye. */
+static int parse_view(const char *s, double view[3]) {
+  static const struct {
+    const char *name;
+    double d[3];
+  } named[] = {{"iso", {1, 1, 1}},   {"front", {0, -1, 0}}, {"back", {0, 1, 0}},
+               {"top", {0, 0, 1}},   {"bottom", {0, 0, -1}}, {"side", {1, 0, 0}},
+               {"left", {-1, 0, 0}}, {"right", {1, 0, 0}}};
+  for (size_t k = 0; k < sizeof named / sizeof *named; ++k)
+    if (!strcmp(s, named[k].name)) {
+      memcpy(view, named[k].d, sizeof named[k].d);
+      return 1;
+    }
+  char *end;
+  const char *c = s;
+  for (int d = 0; d < 3; ++d) {
+    errno = 0;
+    view[d] = strtod(c, &end);
+    if (end == c || errno || !isfinite(view[d]) || *end != (d < 2 ? ',' : '\0')) goto bad;
+    c = end + 1;
+  }
+  if (view[0] * view[0] + view[1] * view[1] + view[2] * view[2] > 0) return 1;
+bad:
+  error_line("--view expects iso, front, back, top, bottom, side, left, right or x,y,z (not all "
+             "zero), got '%s'",
+             s);
+  return 0;
+}
+
+/* --size WxH of a picture, 64..16384 pixels a side. */
+static int parse_picture_size(const char *opt, const char *s, hoc_picture_options *p) {
+  char *end;
+  errno = 0;
+  long w = strtol(s, &end, 10), h = 0;
+  if (!errno && end != s && (*end == 'x' || *end == 'X')) {
+    const char *c = end + 1;
+    h = strtol(c, &end, 10);
+    if (end == c) h = 0;
+  }
+  if (errno || *end || w < 64 || w > 16384 || h < 64 || h > 16384) {
+    error_line("%s expects WIDTHxHEIGHT in pixels, each 64..16384, got '%s'", opt, s);
+    return 0;
+  }
+  p->width = (int)w;
+  p->height = (int)h;
+  return 1;
+}
+
 /* --name value or --name=value: returns the value or NULL if this argument
  * is not `name`. *i advances past a separate value. */
 static const char *opt_value(int argc, char **argv, int *i, const char *name, int *missing) {
@@ -123,6 +172,31 @@ static const char *opt_value(int argc, char **argv, int *i, const char *name, in
   "  --max-iterations N   optimizer sweeps (default 100)\n"                                   \
   "  --check-gradient     compare the analytic gradient with finite differences\n"
 
+#define PICTURE_OPTIONS(size_option)                                                      \
+  "  --view V             iso | front | back | top | bottom | side | left | right |\n"         \
+  "                       x,y,z (direction towards the eye; default iso)\n"                   \
+  "  " size_option " WxH    picture size in pixels (default 1600x1200)\n"                     \
+  "  --zoom-worst         frame the worst elements instead of the whole model\n"             \
+  "  --no-edges           do not draw element edges\n"                                        \
+  "  --transparent        transparent background instead of white\n"
+
+static const char *usage_render =
+    "usage: hocad render MESH.msh [--model MODEL] -o PICTURE.png [options]\n"
+    "\n"
+    "Draw a .msh surface mesh (any order up to 10) as curved elements coloured by\n"
+    "q = 1/eta, with a colour bar; tangled elements in magenta. With --model, q is\n"
+    "the seed's Definition 2 on the CAD (as 'hocad quality'); without it, each\n"
+    "element is measured against the plane through its three corners.\n"
+    "\n"
+    "options:\n"
+    "  -o, --output F.png   the picture\n"
+    "  --model MODEL        the CAD model the mesh lies on\n"
+    "  --histogram F.png    also a histogram of q\n"
+    PICTURE_OPTIONS("--size")
+    "  --measure M          shape | oddy (default shape)\n"
+    "  --threads N          threads (default: all cores)\n"
+    "  -q, --quiet          print only errors\n";
+
 static const char *usage_main =
     "usage: hocad <command> [options]\n"
     "\n"
@@ -135,6 +209,8 @@ static const char *usage_main =
     "                  untangle and smooth any high-order .msh surface mesh of MODEL\n"
     "  quality MODEL MESH.msh\n"
     "                  measure a gmsh .msh surface mesh of MODEL\n"
+    "  render MESH.msh -o PICTURE.png\n"
+    "                  picture of a mesh coloured by quality (headless PNG)\n"
     "\n"
     "  hocad COMMAND --help   options of a command\n"
     "  hocad --version        version\n"
@@ -169,6 +245,10 @@ static const char *usage_mesh =
     "                       orders above 10 have no MSH type: use --vtu)\n"
     "  --vtu F.vtu          VTK Lagrange triangles with q per element\n"
     "  --json F.json        the report as JSON\n"
+    "  --png F.png          picture of the stages side by side (linear | raised |\n"
+    "                       optimized), coloured by q\n"
+    "  --histogram F.png    histogram of q per stage\n"
+    PICTURE_OPTIONS("--png-size")
     "  --no-output          write no mesh file\n"
     "  --threads N          threads for measuring (default: all cores)\n"
     "  -q, --quiet          print only errors\n";
@@ -205,17 +285,21 @@ static const char *usage_quality =
     "  --threads N          threads (default: all cores)\n"
     "  -q, --quiet          print only errors\n";
 
-enum { CMD_MESH = 1, CMD_OPTIMIZE = 2, CMD_QUALITY = 4 };
+enum { CMD_MESH = 1, CMD_OPTIMIZE = 2, CMD_QUALITY = 4, CMD_RENDER = 8 };
 
 static const char *command_name(int cmd) {
-  return cmd == CMD_MESH ? "mesh" : cmd == CMD_OPTIMIZE ? "optimize" : "quality";
+  return cmd == CMD_MESH       ? "mesh"
+         : cmd == CMD_OPTIMIZE ? "optimize"
+         : cmd == CMD_RENDER   ? "render"
+                               : "quality";
 }
 
 /* Parse the options of a command; positional arguments go to pos[].
  * Returns 1 on success, 0 after printing an error, -1 for --help. */
 static int parse(int argc, char **argv, options *o, const char **pos, int max_pos, int *n_pos,
                  int cmd) {
-  const int mesh = cmd == CMD_MESH, opt = cmd & (CMD_MESH | CMD_OPTIMIZE);
+  const int mesh = cmd == CMD_MESH, opt = cmd & (CMD_MESH | CMD_OPTIMIZE),
+            render = cmd == CMD_RENDER, picture = cmd & (CMD_MESH | CMD_RENDER);
   *n_pos = 0;
   for (int i = 0; i < argc; ++i) {
     const char *a = argv[i], *v;
@@ -233,10 +317,30 @@ static int parse(int argc, char **argv, options *o, const char **pos, int max_po
       }
     } else if (VALUE("--threads")) {
       if (!parse_int("--threads", v, 1, 1024, &o->threads)) return 0;
-    } else if (VALUE("--json")) {
+    } else if (!render && VALUE("--json")) {
       o->json = v;
-    } else if (VALUE("--vtu")) {
+    } else if (!render && VALUE("--vtu")) {
       o->vtu = v;
+    } else if (render && (VALUE("--output") || VALUE("-o"))) {
+      o->png = v;
+    } else if (render && VALUE("--model")) {
+      o->model = v;
+    } else if (render && VALUE("--size")) {
+      if (!parse_picture_size("--size", v, &o->picture)) return 0;
+    } else if (mesh && VALUE("--png-size")) {
+      if (!parse_picture_size("--png-size", v, &o->picture)) return 0;
+    } else if (mesh && VALUE("--png")) {
+      o->png = v;
+    } else if (picture && VALUE("--histogram")) {
+      o->histogram = v;
+    } else if (picture && VALUE("--view")) {
+      if (!parse_view(v, o->picture.view)) return 0;
+    } else if (picture && !strcmp(a, "--zoom-worst")) {
+      o->picture.zoom_worst = 1;
+    } else if (picture && !strcmp(a, "--no-edges")) {
+      o->picture.no_edges = 1;
+    } else if (picture && !strcmp(a, "--transparent")) {
+      o->picture.transparent = 1;
     } else if (opt && !strcmp(a, "--fix-curves")) {
       o->fix_curves = 1;
     } else if (opt && !strcmp(a, "--check-gradient")) {
@@ -521,6 +625,49 @@ static int write_outputs(const options *o, const hoc_mesh *mesh, const double *q
   return EXIT_OK;
 }
 
+/* Pictures of the stages side by side (and their histograms): titles say
+ * the stage, its order and its q; `final_q` is the last stage's q. */
+static int write_pictures(const options *o, int n, const hoc_mesh *const *meshes,
+                          const hoc_mesh *final, const double *final_q) {
+  static const char *names[3] = {"linear", "raised", "optimized"};
+  double *q[3] = {0};
+  char title[3][96];
+  const char *titles[3];
+  int code = EXIT_OK;
+  for (int k = 0; k < n && !code; ++k) {
+    size_t ne = hoc_mesh_num_elements(meshes[k]);
+    if (meshes[k] == final) {
+      q[k] = (double *)final_q;
+    } else if (!(q[k] = malloc((ne ? ne : 1) * sizeof *q[k]))) {
+      error_line("out of memory");
+      code = EXIT_FAILURE_;
+      break;
+    } else {
+      hoc_status st = hoc_mesh_measure(meshes[k], o->measure, q[k], NULL, NULL);
+      if (st != HOC_OK) code = fail(st, 0);
+    }
+    const char *name = n == 2 && k == 1 ? (o->optimize ? "optimized" : "raised") : names[k];
+    snprintf(title[k], sizeof title[k], "%s, order %d", name, hoc_mesh_order(meshes[k]));
+    titles[k] = title[k];
+  }
+  if (!code && o->png) {
+    progress(o, "drawing %s", o->png);
+    hoc_status st = hoc_picture_png(o->png, n, meshes, (const double *const *)q, titles,
+                                    &o->picture);
+    if (st != HOC_OK) code = fail(st, 0);
+    else if (!o->quiet) printf("wrote %s\n", o->png);
+  }
+  if (!code && o->histogram) {
+    hoc_status st = hoc_histogram_png(o->histogram, n, meshes, (const double *const *)q, titles,
+                                      &o->picture);
+    if (st != HOC_OK) code = fail(st, 0);
+    else if (!o->quiet) printf("wrote %s\n", o->histogram);
+  }
+  for (int k = 0; k < n; ++k)
+    if (meshes[k] != final) free(q[k]);
+  return code;
+}
+
 /* Commands ---------------------------------------------------------------- */
 
 static int cmd_mesh(int argc, char **argv) {
@@ -558,7 +705,7 @@ static int cmd_mesh(int argc, char **argv) {
 
   int code = EXIT_OK;
   hoc_model *model = NULL;
-  hoc_mesh *lin = NULL, *ho = NULL, *written = NULL;
+  hoc_mesh *lin = NULL, *ho = NULL, *written = NULL, *raised = NULL;
   double *q = NULL;
   report r = {0};
   progress(&o, "reading %s", o.model);
@@ -622,6 +769,11 @@ static int cmd_mesh(int argc, char **argv) {
     final = ho;
   }
   if (o.optimize && o.order > 1) {
+    /* the raised mesh before optimisation, for the pictures */
+    if ((o.png || o.histogram) && (st = hoc_mesh_elevate(lin, o.order, o.nodes, &raised))) {
+      code = fail(st, 0);
+      goto done;
+    }
     if ((code = optimize_stage(&o, &r, ho))) goto done;
   }
   /* files hold equispaced nodes: measure what is written */
@@ -656,11 +808,17 @@ static int cmd_mesh(int argc, char **argv) {
     if ((code = write_json(o.json, &o, &r, "mesh"))) goto done;
     if (!o.quiet) printf("wrote %s\n", o.json);
   }
+  if (o.png || o.histogram) {
+    const hoc_mesh *stages[3] = {lin, raised ? raised : final, final};
+    int n = o.order == 1 ? 1 : raised ? 3 : 2;
+    if ((code = write_pictures(&o, n, stages, final, q))) goto done;
+  }
   report_tangled(final, q, o.optimize && o.order > 1);
   if (r.stages[r.n - 1].stats.tangled) code = EXIT_TANGLED;
   if (!code && hoc_mesh_num_failed_faces(lin)) code = EXIT_PARTIAL;
 done:
   free(q);
+  hoc_mesh_destroy(&raised);
   hoc_mesh_destroy(&written);
   hoc_mesh_destroy(&ho);
   hoc_mesh_destroy(&lin);
@@ -792,6 +950,87 @@ done:
   return code;
 }
 
+static int cmd_render(int argc, char **argv) {
+  options o = {0};
+  const char *pos[1];
+  int n_pos, pr = parse(argc, argv, &o, pos, 1, &n_pos, CMD_RENDER);
+  if (pr < 0) {
+    fputs(usage_render, stdout);
+    return EXIT_OK;
+  }
+  if (!pr) return EXIT_USAGE;
+  if (n_pos != 1) {
+    error_line("render needs one .msh mesh (see hocad render --help)");
+    return EXIT_USAGE;
+  }
+  if (!o.png) {
+    error_line("render needs an output: -o PICTURE.png");
+    return EXIT_USAGE;
+  }
+  o.mesh_in = pos[0];
+  if (o.threads) omp_set_num_threads(o.threads);
+  const char *base = strrchr(o.mesh_in, '/');
+  base = base ? base + 1 : o.mesh_in;
+  if (!o.model) {
+    hoc_quality_stats s;
+    hoc_status st =
+        hoc_picture_msh_file(o.mesh_in, o.measure, o.png, o.histogram, &o.picture, &s);
+    if (st != HOC_OK) return fail(st, st == HOC_ERR_IO && access(o.mesh_in, R_OK) != 0);
+    if (!o.quiet) {
+      printf("%s: %zu elements of order %d, q min %.4f mean %.4f, %zu tangled (measured "
+             "without CAD: against each element's corner plane)\n",
+             base, s.elements, s.order, s.min, s.mean, s.tangled);
+      printf("wrote %s\n", o.png);
+      if (o.histogram) printf("wrote %s\n", o.histogram);
+    }
+    return EXIT_OK;
+  }
+  int code = EXIT_OK;
+  hoc_model *model = NULL;
+  hoc_mesh *mesh = NULL;
+  double *q = NULL;
+  hoc_quality_stats s;
+  hoc_status st = hoc_model_open(o.model, &model);
+  if (st != HOC_OK) return fail(st, 1);
+  if ((st = hoc_mesh_read_msh(model, o.mesh_in, &mesh)) != HOC_OK) {
+    code = fail(st, 1);
+    goto done;
+  }
+  size_t ne = hoc_mesh_num_elements(mesh);
+  if (!(q = malloc((ne ? ne : 1) * sizeof *q))) {
+    error_line("out of memory");
+    code = EXIT_FAILURE_;
+    goto done;
+  }
+  if ((st = hoc_mesh_measure(mesh, o.measure, q, NULL, &s)) != HOC_OK) {
+    code = fail(st, 0);
+    goto done;
+  }
+  const hoc_mesh *views[1] = {mesh};
+  const double *qs[1] = {q};
+  const char *titles[1] = {base};
+  if ((st = hoc_picture_png(o.png, 1, views, qs, titles, &o.picture)) != HOC_OK) {
+    code = fail(st, 0);
+    goto done;
+  }
+  if (o.histogram &&
+      (st = hoc_histogram_png(o.histogram, 1, views, qs, titles, &o.picture)) != HOC_OK) {
+    code = fail(st, 0);
+    goto done;
+  }
+  if (!o.quiet) {
+    printf("%s: %zu elements of order %d, q min %.4f mean %.4f, %zu tangled\n", base,
+           s.elements, s.order, s.min, s.mean, s.tangled);
+    printf("wrote %s\n", o.png);
+    if (o.histogram) printf("wrote %s\n", o.histogram);
+  }
+done:
+  free(q);
+  hoc_mesh_destroy(&mesh);
+  hoc_model_destroy(&model);
+  return code;
+}
+
 int main(int argc, char **argv) {
   signal(SIGINT, on_signal);
   signal(SIGTERM, on_signal);
@@ -811,6 +1050,9 @@ int main(int argc, char **argv) {
   if (!strcmp(cmd, "mesh")) return cmd_mesh(argc - 2, argv + 2);
   if (!strcmp(cmd, "quality")) return cmd_quality(argc - 2, argv + 2);
   if (!strcmp(cmd, "optimize")) return cmd_optimize(argc - 2, argv + 2);
-  error_line("unknown command '%s' (commands: mesh, optimize, quality; see hocad --help)", cmd);
+  if (!strcmp(cmd, "render")) return cmd_render(argc - 2, argv + 2);
+  error_line("unknown command '%s' (commands: mesh, optimize, quality, render; see hocad "
+             "--help)",
+             cmd);
   return EXIT_USAGE;
 }

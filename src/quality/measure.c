@@ -55,6 +55,27 @@ hoc_status hoc_mesh_measure_tables(const hoc_mesh *mesh, const hoc_quality_table
   return status;
 }
 
+void hoc_quality_stats_from(const double *q, size_t ne, int order, hoc_quality_stats *stats) {
+  double mn = INFINITY, mx = -INFINITY, sum = 0, sum2 = 0;
+  size_t nt = 0;
+  for (size_t e = 0; e < ne; ++e) {
+    mn = fmin(mn, q[e]);
+    mx = fmax(mx, q[e]);
+    sum += q[e];
+    nt += q[e] == 0.0;
+  }
+  double mean = ne ? sum / (double)ne : 0;
+  for (size_t e = 0; e < ne; ++e) sum2 += (q[e] - mean) * (q[e] - mean);
+  stats->elements = ne;
+  stats->order = order;
+  stats->min = ne ? mn : 0;
+  stats->max = ne ? mx : 0;
+  stats->mean = mean;
+  stats->std = ne ? sqrt(sum2 / (double)ne) : 0;
+  stats->tangled = nt;
+  stats->seconds = 0;
+}
+
 hoc_status hoc_mesh_measure(const hoc_mesh *mesh, hoc_measure measure, double *quality,
                             unsigned char *tangled, hoc_quality_stats *stats) {
   HOC_CHECK(mesh, HOC_ERR_ARGUMENT, "no mesh given");
@@ -73,23 +94,7 @@ hoc_status hoc_mesh_measure(const hoc_mesh *mesh, hoc_measure measure, double *q
   if (status == HOC_OK && tangled)
     for (size_t e = 0; e < ne; ++e) tangled[e] = q[e] == 0.0;
   if (status == HOC_OK && stats) {
-    double mn = INFINITY, mx = -INFINITY, sum = 0, sum2 = 0;
-    size_t nt = 0;
-    for (size_t e = 0; e < ne; ++e) {
-      mn = fmin(mn, q[e]);
-      mx = fmax(mx, q[e]);
-      sum += q[e];
-      nt += q[e] == 0.0;
-    }
-    double mean = ne ? sum / (double)ne : 0;
-    for (size_t e = 0; e < ne; ++e) sum2 += (q[e] - mean) * (q[e] - mean);
-    stats->elements = ne;
-    stats->order = mesh->order;
-    stats->min = ne ? mn : 0;
-    stats->max = ne ? mx : 0;
-    stats->mean = mean;
-    stats->std = ne ? sqrt(sum2 / (double)ne) : 0;
-    stats->tangled = nt;
+    hoc_quality_stats_from(q, ne, mesh->order, stats);
     stats->seconds = now() - t0;
   }
   if (q != quality) free(q);

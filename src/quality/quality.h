@@ -56,6 +56,9 @@ struct hoc_mesh;
 hoc_status hoc_mesh_measure_tables(const struct hoc_mesh *mesh, const hoc_quality_tables *t,
                                    hoc_measure measure, double *q);
 
+/** Statistics of q[ne] (seconds left 0). */
+void hoc_quality_stats_from(const double *q, size_t ne, int order, hoc_quality_stats *stats);
+
 /** Pointwise distortion eta(S) of Table 1 for d = 2, with the regularised
  *  determinant sigma_delta = (sigma + sqrt(sigma^2 + 4 delta^2)) / 2 (delta = 0:
  *  eta = +inf where sigma <= 0).
