@@ -8,6 +8,9 @@
 # Cases: BENCH_CASES="model:order:size_factor ..." (size = bbox diagonal / factor;
 # 0: each tool's default size). Threads: BENCH_THREADS (default 1).
 # Prints one table row per case and tool; every number comes from the run.
+# A third row per case ("hocad/g") raises gmsh's own linear mesh of the case
+# with hocad (mesh --linear), so elevation times compare on the same mesh:
+# its elev_s against gmsh's elev_s (gmsh's "Done meshing order P").
 # SPDX-License-Identifier: GPL-2.0-or-later
 set -u
 here=$(cd "$(dirname "$0")/.." && pwd)
@@ -25,10 +28,11 @@ jget() { # jget FILE STAGE KEY: a number from hocad's JSON report
 }
 jtop() { grep -o "\"$2\": [-0-9.e+]*" "$1" | head -1 | cut -d' ' -f2; }
 
-printf "%-26s %-5s %2s %8s %8s %7s %7s %7s %7s %7s %5s %8s %7s %7s %7s\n" model tool p elements nodes \
+printf "%-26s %-7s %2s %8s %8s %7s %7s %7s %7s %7s %5s %8s %7s %7s %7s\n" model tool p elements nodes \
   linear_s elev_s meas_s opt_s write_s iters peakMB minq meanq tangled
 for c in $cases; do
   IFS=: read -r m p f <<< "$c"
+  rm -f "$work"/h.* "$work"/g.* "$work"/g1.* "$work"/hg.*
   model=$models/$m
   diag=$("$hocad" mesh "$model" --order 1 --no-output 2>/dev/null | sed -n 's/.*size \([0-9.e+-]*\) x \([0-9.e+-]*\) x \([0-9.e+-]*\).*/\1 \2 \3/p' |
          awk '{print sqrt($1*$1+$2*$2+$3*$3)}')
@@ -45,8 +49,8 @@ for c in $cases; do
   if [ -s "$work/h.json" ]; then
     meas=$(awk -v a="$(jget "$work/h.json" linear measure_seconds)" -v b="$(jget "$work/h.json" high-order measure_seconds)" \
                -v c="$(jget "$work/h.json" optimized measure_seconds)" 'BEGIN{print a+b+c}')
-    nodes=$(grep -m1 -A2 '^\$Nodes' "$work/h.msh" | sed -n 2p | cut -d' ' -f2)
-    printf "%-26s %-5s %2s %8s %8s %7.2f %7.2f %7.2f %7.2f %7.2f %5s %8.0f %7.4f %7.4f %7s\n" "$m" hocad "$p" \
+    nodes=$(jtop "$work/h.json" nodes)
+    printf "%-26s %-7s %2s %8s %8s %7.2f %7.2f %7.2f %7.2f %7.2f %5s %8.0f %7.4f %7.4f %7s\n" "$m" hocad "$p" \
       "$(jget "$work/h.json" optimized elements)" "$nodes" "$(jget "$work/h.json" linear seconds)" \
       "$(jget "$work/h.json" high-order seconds)" "$meas" "$(jget "$work/h.json" optimized seconds)" \
       "$(jtop "$work/h.json" write_seconds)" "$(jget "$work/h.json" optimized iterations)" \
@@ -65,13 +69,28 @@ for c in $cases; do
     opt=$(grep -o 'Done optimizing mesh (Wall [0-9.e-]*' "$work/g.log" | tail -1 | awk '{print $NF}')
     "$hocad" quality "$model" "$work/g.msh" --json "$work/g.json" -q 2>/dev/null
     if [ -s "$work/g.json" ]; then
-      nodes=$(grep -m1 -A1 '^\$Nodes' "$work/g.msh" | sed -n 2p | cut -d' ' -f2)
-      printf "%-26s %-5s %2s %8s %8s %7.2f %7.2f %7s %7.2f %7s %5s %8.0f %7.4f %7.4f %7s\n" "$m" gmsh "$p" \
+      nodes=$(jtop "$work/g.json" nodes)
+      printf "%-26s %-7s %2s %8s %8s %7.2f %7.2f %7s %7.2f %7s %5s %8.0f %7.4f %7.4f %7s\n" "$m" gmsh "$p" \
         "$(jget "$work/g.json" input elements)" "$nodes" "$(awk -v a="${l1:-0}" -v b="${lin:-0}" 'BEGIN{print a+b}')" \
         "${elev:-0}" - "${opt:-0}" - - "$(awk '{print $1/1024}' "$work/g.rss")" \
         "$(jget "$work/g.json" input min)" "$(jget "$work/g.json" input mean)" "$(jget "$work/g.json" input tangled)"
     else
       echo "$m gmsh p=$p: no readable mesh ($(grep -m1 -i error "$work/g.log"))"
+    fi
+    # hocad raising gmsh's linear mesh (same options: the same mesh)
+    "$gmsh" "$model" -2 -nt "$threads" "${gsize_args[@]}" -o "$work/g1.msh" > "$work/g1.log" 2>&1
+    OMP_NUM_THREADS=$threads /usr/bin/time -f "%M" -o "$work/hg.rss" "$hocad" mesh "$model" --order "$p" \
+      --linear "$work/g1.msh" --threads "$threads" -q -o "$work/hg.msh" --json "$work/hg.json" 2>/dev/null
+    if [ -s "$work/hg.json" ]; then
+      nodes=$(jtop "$work/hg.json" nodes)
+      printf "%-26s %-7s %2s %8s %8s %7.2f %7.2f %7s %7.2f %7.2f %5s %8.0f %7.4f %7.4f %7s\n" "$m" hocad/g "$p" \
+        "$(jget "$work/hg.json" optimized elements)" "$nodes" "$(jget "$work/hg.json" linear seconds)" \
+        "$(jget "$work/hg.json" high-order seconds)" - "$(jget "$work/hg.json" optimized seconds)" \
+        "$(jtop "$work/hg.json" write_seconds)" "$(jget "$work/hg.json" optimized iterations)" \
+        "$(awk '{print $1/1024}' "$work/hg.rss")" "$(jget "$work/hg.json" optimized min)" \
+        "$(jget "$work/hg.json" optimized mean)" "$(jget "$work/hg.json" optimized tangled)"
+    else
+      echo "$m hocad on gmsh's linear mesh p=$p failed"
     fi
   fi
 done

@@ -414,6 +414,7 @@ typedef struct report {
   int n;
   double write_seconds; /* writing the mesh files */
   double model_seconds; /* reading the CAD model */
+  size_t nodes;         /* of the final mesh */
 } report;
 
 static void print_table(const report *r) {
@@ -504,8 +505,8 @@ static int write_json(const char *path, const options *o, const report *r, const
                s->iterations, s->converged ? "true" : "false", s->objective_initial, s->objective);
     text_add(&t, "}");
   }
-  text_add(&t, "\n  ],\n  \"model_seconds\": %.6f,\n  \"write_seconds\": %.6f\n}\n", r->model_seconds,
-           r->write_seconds);
+  text_add(&t, "\n  ],\n  \"nodes\": %zu,\n  \"model_seconds\": %.6f,\n  \"write_seconds\": %.6f\n}\n",
+           r->nodes, r->model_seconds, r->write_seconds);
   if (t.failed) {
     free(t.s);
     error_line("out of memory writing the report");
@@ -804,6 +805,7 @@ static int cmd_mesh(int argc, char **argv) {
   t0 = now();
   if ((code = write_outputs(&o, final, q, out))) goto done;
   r.write_seconds = now() - t0;
+  r.nodes = hoc_mesh_num_nodes(final);
   if (o.json) {
     if ((code = write_json(o.json, &o, &r, "mesh"))) goto done;
     if (!o.quiet) printf("wrote %s\n", o.json);
@@ -880,6 +882,7 @@ static int cmd_quality(int argc, char **argv) {
       goto done;
     }
   }
+  r.nodes = hoc_mesh_num_nodes(mesh);
   if (o.json) code = write_json(o.json, &o, &r, "quality");
 done:
   free(q);
@@ -940,6 +943,7 @@ static int cmd_optimize(int argc, char **argv) {
     goto done;
   }
   if ((code = write_outputs(&o, mesh, q, o.out))) goto done;
+  r.nodes = hoc_mesh_num_nodes(mesh);
   if (o.json && (code = write_json(o.json, &o, &r, "optimize"))) goto done;
   report_tangled(mesh, q, 1);
   if (r.stages[r.n - 1].stats.tangled) code = EXIT_TANGLED;
