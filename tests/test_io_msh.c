@@ -7,6 +7,7 @@
  * SPDX-License-Identifier: GPL-2.0-or-later */
 #include "io/io.h"
 #include "test_util.h"
+#include "test_fixtures.h"
 
 #include <gmshc.h>
 #include <stdint.h>
@@ -127,36 +128,14 @@ static void test_numbers(void) {
   CHECK(hoc_io_parse_double("2.5e3 junk", 5, &v) && v == 2500); /* only [0, n) is read */
 }
 
-/* Reference node lattice (gmsh ordering), built here independently -------------- */
-
-/* Lattice (i, j) of the order-p triangle nodes with the corner (i0, j0) and
- * size p of a sub-triangle, in gmsh order: vertices, edges 0-1, 1-2, 2-0,
- * then the interior recursively. */
-static int lattice_rec(int p, int i0, int j0, int *ij) {
-  int n = 0;
-  if (p < 0) return 0;
-  if (p == 0) {
-    ij[0] = i0, ij[1] = j0;
-    return 1;
-  }
-  int v[3][2] = {{i0, j0}, {i0 + p, j0}, {i0, j0 + p}};
-  for (int k = 0; k < 3; ++k)
-    ij[2 * n] = v[k][0], ij[2 * n + 1] = v[k][1], ++n;
-  for (int e = 0; e < 3; ++e)
-    for (int k = 1; k < p; ++k) {
-      const int *a = v[e], *b = v[(e + 1) % 3];
-      ij[2 * n] = a[0] + (b[0] - a[0]) * k / p;
-      ij[2 * n + 1] = a[1] + (b[1] - a[1]) * k / p;
-      ++n;
-    }
-  return n + lattice_rec(p - 3, i0 + 1, j0 + 1, ij + 2 * n);
-}
+/* Reference node lattice (gmsh ordering), built independently in
+ * test_fixtures.h -------------------------------------------------------- */
 
 static void test_lattice_is_gmsh(void) {
   int ok = 1;
   for (int p = 1; p <= 10; ++p) {
     int ij[2 * 66], np = (p + 1) * (p + 2) / 2, ierr = 0;
-    CHECK(lattice_rec(p, 0, 0, ij) == np);
+    CHECK(fixture_lattice(p, 0, 0, ij) == np);
     char *name = NULL;
     int dim, order, nn, nprim;
     double *lc = NULL;
@@ -256,7 +235,7 @@ static void build_synth(synth *m, int p) {
   memset(m, 0, sizeof *m);
   m->p = p;
   int np = (p + 1) * (p + 2) / 2, ij[2 * 66];
-  lattice_rec(p, 0, 0, ij);
+  fixture_lattice(p, 0, 0, ij);
   static int index[MAXN];
   for (int k = 0; k < MAXN; ++k)
     index[k] = -1;

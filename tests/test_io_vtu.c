@@ -7,31 +7,12 @@
  * SPDX-License-Identifier: GPL-2.0-or-later */
 #include "io/io.h"
 #include "test_util.h"
+#include "test_fixtures.h"
 
 #include <stdint.h>
 #include <string.h>
 #include <sys/stat.h>
 
-/* Node lattice (i, j) of an order-p triangle in gmsh order (vertices, edges
- * 0-1, 1-2, 2-0, interior recursively), of size p at corner (i0, j0). */
-static int lattice_rec(int p, int i0, int j0, int *ij) {
-  if (p < 0) return 0;
-  if (p == 0) {
-    ij[0] = i0, ij[1] = j0;
-    return 1;
-  }
-  int v[3][2] = {{i0, j0}, {i0 + p, j0}, {i0, j0 + p}}, n = 0;
-  for (int k = 0; k < 3; ++k)
-    ij[2 * n] = v[k][0], ij[2 * n + 1] = v[k][1], ++n;
-  for (int e = 0; e < 3; ++e)
-    for (int k = 1; k < p; ++k) {
-      const int *a = v[e], *b = v[(e + 1) % 3];
-      ij[2 * n] = a[0] + (b[0] - a[0]) * k / p;
-      ij[2 * n + 1] = a[1] + (b[1] - a[1]) * k / p;
-      ++n;
-    }
-  return n + lattice_rec(p - 3, i0 + 1, j0 + 1, ij + 2 * n);
-}
 
 /* A polynomial map of degree min(p, 2) of the reference triangle. */
 static void map_point(int p, double r, double s, double *x) {
@@ -53,7 +34,7 @@ typedef struct mesh {
 
 static void build(mesh *m, int p, size_t n_cells) {
   int np = (p + 1) * (p + 2) / 2, ij[2 * 136];
-  lattice_rec(p, 0, 0, ij);
+  fixture_lattice(p, 0, 0, ij);
   m->p = p;
   m->n_cells = n_cells;
   m->n_points = n_cells * (size_t)np;

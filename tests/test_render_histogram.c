@@ -4,26 +4,12 @@
  * SPDX-License-Identifier: GPL-2.0-or-later */
 #include "render/render.h"
 #include "test_util.h"
+#define HOC_FIXTURES_PNG
+#include "test_fixtures.h"
 
 #include <png.h>
 #include <string.h>
 
-static unsigned char *read_png(const char *path, int *w, int *h) {
-  png_image img;
-  memset(&img, 0, sizeof img);
-  img.version = PNG_IMAGE_VERSION;
-  if (!png_image_begin_read_from_file(&img, path)) return NULL;
-  img.format = PNG_FORMAT_RGBA;
-  unsigned char *buf = malloc(PNG_IMAGE_SIZE(img));
-  if (!buf || !png_image_finish_read(&img, NULL, buf, 0, NULL)) {
-    free(buf);
-    png_image_free(&img);
-    return NULL;
-  }
-  *w = (int)img.width;
-  *h = (int)img.height;
-  return buf;
-}
 
 /* Magenta pixels (the tangled colour) in columns [x0, x1). */
 static size_t count_magenta(const unsigned char *px, int w, int h, int x0, int x1) {
@@ -60,13 +46,13 @@ int main(void) {
   int w, h;
 
   CHECK_OK(hoc_render_histogram_png("hist_good.png", views, 1, &opt));
-  unsigned char *px = read_png("hist_good.png", &w, &h);
+  unsigned char *px = fixture_read_png("hist_good.png", &w, &h);
   CHECK(px && w == 800 && h == 300);
   if (px) CHECK(count_magenta(px, w, h, 0, w) == 0);
   free(px);
 
   CHECK_OK(hoc_render_histogram_png("hist_two.png", views, 2, &opt));
-  px = read_png("hist_two.png", &w, &h);
+  px = fixture_read_png("hist_two.png", &w, &h);
   CHECK(px && w == 800 && h == 300);
   if (px) {
     /* the left panel has no tangled bar, the right one has */
@@ -81,7 +67,7 @@ int main(void) {
   /* transparent background: the corners are transparent */
   opt.transparent = 1;
   CHECK_OK(hoc_render_histogram_png("hist_alpha.png", views, 2, &opt));
-  px = read_png("hist_alpha.png", &w, &h);
+  px = fixture_read_png("hist_alpha.png", &w, &h);
   CHECK(px && px[3] == 0 && px[4 * ((size_t)w * (size_t)h - 1) + 3] == 0);
   free(px);
 

@@ -6,6 +6,8 @@
 #include "basis/basis.h"
 #include "render/render.h"
 #include "test_util.h"
+#define HOC_FIXTURES_PNG
+#include "test_fixtures.h"
 
 #include <png.h>
 #include <string.h>
@@ -75,23 +77,6 @@ static hoc_render_mesh sphere_view(const sphere *s, const double *q, const char 
   return m;
 }
 
-/* Decode with libpng's simplified reader into RGBA; NULL on failure. */
-static unsigned char *read_png(const char *path, int *w, int *h) {
-  png_image img;
-  memset(&img, 0, sizeof img);
-  img.version = PNG_IMAGE_VERSION;
-  if (!png_image_begin_read_from_file(&img, path)) return NULL;
-  img.format = PNG_FORMAT_RGBA;
-  unsigned char *buf = malloc(PNG_IMAGE_SIZE(img));
-  if (!buf || !png_image_finish_read(&img, NULL, buf, 0, NULL)) {
-    free(buf);
-    png_image_free(&img);
-    return NULL;
-  }
-  *w = (int)img.width;
-  *h = (int)img.height;
-  return buf;
-}
 
 /* Pixels of the tangled colour (magenta, shaded): red = blue, no green. */
 static size_t count_tangled_pixels(const unsigned char *px, int w, int h) {
@@ -120,7 +105,7 @@ static void check_disc(const sphere *s, const char *path) {
   hoc_render_options opt = {W, H, {0, 0, 1}, 0, 0, 1};
   CHECK_OK(hoc_render_png(path, &v, 1, &opt));
   int w = 0, h = 0;
-  unsigned char *px = read_png(path, &w, &h);
+  unsigned char *px = fixture_read_png(path, &w, &h);
   CHECK(px != NULL);
   if (!px) return;
   CHECK(w == W && h == H);
@@ -150,7 +135,7 @@ static void check_disc(const sphere *s, const char *path) {
   free(px);
   opt.no_edges = 1;
   CHECK_OK(hoc_render_png(path, &v, 1, &opt));
-  px = read_png(path, &w, &h);
+  px = fixture_read_png(path, &w, &h);
   CHECK(px && count_dark(px, w, h) == 0);
   free(px);
 }
@@ -177,12 +162,12 @@ int main(void) {
   hoc_render_mesh v = sphere_view(&s3, q, "sphere, order 3");
   int w, h;
   CHECK_OK(hoc_render_png("render_untangled.png", &v, 1, &opt));
-  unsigned char *px = read_png("render_untangled.png", &w, &h);
+  unsigned char *px = fixture_read_png("render_untangled.png", &w, &h);
   CHECK(px && count_tangled_pixels(px, w, h) == 0);
   free(px);
   q[front] = 0;
   CHECK_OK(hoc_render_png("render_tangled.png", &v, 1, &opt));
-  px = read_png("render_tangled.png", &w, &h);
+  px = fixture_read_png("render_tangled.png", &w, &h);
   /* the element covers a few hundred pixels */
   CHECK(px && count_tangled_pixels(px, w, h) > 200);
   free(px);
@@ -204,8 +189,8 @@ int main(void) {
   omp_set_num_threads(threads);
 #endif
   int w1, h1, w3, h3;
-  unsigned char *p1 = read_png("render_threads1.png", &w1, &h1);
-  unsigned char *p3 = read_png("render_threads3.png", &w3, &h3);
+  unsigned char *p1 = fixture_read_png("render_threads1.png", &w1, &h1);
+  unsigned char *p3 = fixture_read_png("render_threads3.png", &w3, &h3);
   CHECK(p1 && p3 && w1 == w3 && h1 == h3 && !memcmp(p1, p3, 4 * (size_t)w1 * (size_t)h1));
   /* zoomed on the tangled element: it fills a good part of the left panel */
   CHECK(p1 && count_tangled_pixels(p1, w1, h1) > 4000);
