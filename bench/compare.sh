@@ -5,8 +5,10 @@
 #   HOCAD  default build/hocad
 #   GMSH   default ../shared/peers/gmsh-5.0-dev (gmsh's own route: linear mesh,
 #          order elevation, -optimize_ho), falls back to Debian's gmsh
-# Cases: BENCH_CASES="model:order:size_factor ..." (size = bbox diagonal / factor;
-# 0: each tool's default size). Threads: BENCH_THREADS (default 1).
+# Cases: BENCH_CASES="model:order:size ..." where size is 0 (each tool's
+# default), F (max edge length = bbox diagonal / F for both tools) or hH
+# (max edge length H, min H/4 for both: gmsh -clmax H -clmin H/4, hocad
+# --size H --size-min H/4). Threads: BENCH_THREADS (default 1).
 # Prints one table row per case and tool; every number comes from the run.
 # A third row per case ("hocad/g") raises gmsh's own linear mesh of the case
 # with hocad (mesh --linear), so elevation times compare on the same mesh:
@@ -37,7 +39,12 @@ for c in $cases; do
   diag=$("$hocad" mesh "$model" --order 1 --no-output 2>/dev/null | sed -n 's/.*size \([0-9.e+-]*\) x \([0-9.e+-]*\) x \([0-9.e+-]*\).*/\1 \2 \3/p' |
          awk '{print sqrt($1*$1+$2*$2+$3*$3)}')
   size_args=() gsize_args=()
-  if [ "$f" != 0 ]; then
+  if [ "${f#h}" != "$f" ]; then
+    h=${f#h}
+    hmin=$(awk -v h="$h" 'BEGIN{print h/4}')
+    size_args=(--size "$h" --size-min "$hmin")
+    gsize_args=(-clmax "$h" -clmin "$hmin")
+  elif [ "$f" != 0 ]; then
     h=$(awk -v d="$diag" -v f="$f" 'BEGIN{print d/f}')
     size_args=(--size "$h")
     gsize_args=(-clmax "$h")
@@ -75,7 +82,7 @@ for c in $cases; do
         "${elev:-0}" - "${opt:-0}" - - "$(awk '{print $1/1024}' "$work/g.rss")" \
         "$(jget "$work/g.json" input min)" "$(jget "$work/g.json" input mean)" "$(jget "$work/g.json" input tangled)"
     else
-      echo "$m gmsh p=$p: no readable mesh ($(grep -m1 -i error "$work/g.log"))"
+      echo "$m gmsh p=$p: no readable mesh ($(grep -m1 -i -E 'error' "$work/g.log" | grep -v summary || grep -m1 -i error "$work/g.log"))"
     fi
     # hocad raising gmsh's linear mesh (same options: the same mesh)
     "$gmsh" "$model" -2 -nt "$threads" "${gsize_args[@]}" -o "$work/g1.msh" > "$work/g1.log" 2>&1

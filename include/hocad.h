@@ -272,7 +272,8 @@ hoc_status hoc_mesh_check_gradient(hoc_mesh *mesh, hoc_measure measure, int fix_
 
 /** Options of the pictures (PNG, drawn in software: no display, no GPU). */
 typedef struct hoc_picture_options {
-  int width, height; /**< whole picture in pixels (0: 1600 x 1200) */
+  int width, height; /**< whole picture in pixels (0: 1600 x 1200 for one mesh,
+                          900 n x 1000 up to 3600 wide for n side by side) */
   double view[3];    /**< direction from the model to the eye ((0,0,0): isometric (1,1,1)) */
   int zoom_worst;    /**< frame the worst elements of the first mesh instead of everything */
   int no_edges;      /**< do not draw the element edges */

@@ -175,7 +175,9 @@ static const char *opt_value(int argc, char **argv, int *i, const char *name, in
 #define PICTURE_OPTIONS(size_option)                                                      \
   "  --view V             iso | front | back | top | bottom | side | left | right |\n"         \
   "                       x,y,z (direction towards the eye; default iso)\n"                   \
-  "  " size_option " WxH    picture size in pixels (default 1600x1200)\n"                     \
+  "  " size_option " WxH\n"                                                                 \
+  "                       picture size in pixels (default 1600x1200; stages side\n"          \
+  "                       by side 2700x1000)\n"                                              \
   "  --zoom-worst         frame the worst elements instead of the whole model\n"             \
   "  --no-edges           do not draw element edges\n"                                        \
   "  --transparent        transparent background instead of white\n"

@@ -64,6 +64,11 @@ static hoc_status draw_meshes(draw_fn draw, const char *path, int n,
   }
   hoc_render_options ro;
   to_render_options(options, &ro);
+  if (ro.width == 0 && ro.height == 0 && n > 1) {
+    /* side by side: panels about square rather than thin strips */
+    ro.width = n * 900 > 3600 ? 3600 : n * 900;
+    ro.height = 1000;
+  }
   if (status == HOC_OK) status = draw(path, views, n, &ro);
   for (int k = 0; k < n; ++k) free(rs[k]);
   return status;
