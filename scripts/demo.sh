@@ -11,4 +11,5 @@ mkdir -p build/demo
 model=${1:-examples/models/gmsh_t20_component8.step}
 name=$(basename "${model%.*}")
 ./build/hocad mesh "$model" --order 3 -o "build/demo/${name}_p3.msh" \
-  --vtu "build/demo/${name}_p3.vtu" --json "build/demo/${name}_p3.json"
+  --vtu "build/demo/${name}_p3.vtu" --json "build/demo/${name}_p3.json" \
+  --png "build/demo/${name}_p3.png"
