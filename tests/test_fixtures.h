@@ -4,8 +4,27 @@
 #ifndef HOC_TEST_FIXTURES_H
 #define HOC_TEST_FIXTURES_H
 
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+
+/* Whole file in memory, NUL-terminated (*n bytes before the NUL); NULL if
+ * it cannot be opened or memory runs out. */
+static inline char *fixture_slurp(const char *path, size_t *n) {
+  *n = 0;
+  FILE *f = fopen(path, "rb");
+  if (!f) return NULL;
+  fseek(f, 0, SEEK_END);
+  long s = ftell(f);
+  rewind(f);
+  char *d = s >= 0 ? malloc((size_t)s + 1) : NULL;
+  if (d) {
+    *n = fread(d, 1, (size_t)s, f);
+    d[*n] = '\0';
+  }
+  fclose(f);
+  return d;
+}
 
 /* Node lattice (i, j) of an order-p triangle in gmsh order (vertices, edges
  * 0-1, 1-2, 2-0, interior recursively), of size p at corner (i0, j0);

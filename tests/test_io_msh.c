@@ -823,19 +823,6 @@ static void test_binary_variants(void) {
 
 /* Corrupt input ------------------------------------------------------------------------- */
 
-static char *slurp(const char *path, size_t *n) {
-  *n = 0;
-  FILE *f = fopen(path, "rb");
-  if (!f) return NULL;
-  fseek(f, 0, SEEK_END);
-  long s = ftell(f);
-  rewind(f);
-  char *d = malloc((size_t)s + 1);
-  if (d) *n = fread(d, 1, (size_t)s, f);
-  fclose(f);
-  return d;
-}
-
 /* A successful read must be self-consistent. */
 static int raw_is_consistent(const hoc_msh_raw *raw) {
   int p = raw->order, np = (p + 1) * (p + 2) / 2;
@@ -851,7 +838,7 @@ static int raw_is_consistent(const hoc_msh_raw *raw) {
 
 static void test_corrupt_file(const char *path) {
   size_t n;
-  char *d = slurp(path, &n);
+  char *d = fixture_slurp(path, &n);
   CHECK(d != NULL && n > 0);
   if (!d) return;
   const char *end_marker = "$EndElements";

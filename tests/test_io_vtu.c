@@ -86,22 +86,6 @@ static hoc_status write_mesh(const mesh *m, const char *path, int cell_data) {
   return hoc_vtu_write(path, &d);
 }
 
-static char *slurp(const char *path, size_t *n) {
-  *n = 0;
-  FILE *f = fopen(path, "rb");
-  if (!f) return NULL;
-  fseek(f, 0, SEEK_END);
-  long s = ftell(f);
-  rewind(f);
-  char *d = malloc((size_t)s + 1);
-  if (d) {
-    *n = fread(d, 1, (size_t)s, f);
-    d[*n] = '\0';
-  }
-  fclose(f);
-  return d;
-}
-
 /* The appended block of the DataArray named `name`: its bytes and size;
  * checks its declared type. NULL if absent or inconsistent. */
 static const char *block(const char *file, size_t size, const char *name, const char *type,
@@ -130,7 +114,7 @@ static const char *block(const char *file, size_t size, const char *name, const 
 
 static void check_file(const mesh *m, const char *path, int cell_data) {
   size_t size;
-  char *f = slurp(path, &size);
+  char *f = fixture_slurp(path, &size);
   CHECK(f != NULL);
   if (!f) return;
   int p = m->p, np = (p + 1) * (p + 2) / 2;
@@ -212,7 +196,7 @@ static void test_orders(void) {
   e.order = 2;
   CHECK_OK(hoc_vtu_write("empty.vtu", &e));
   size_t size;
-  char *f = slurp("empty.vtu", &size);
+  char *f = fixture_slurp("empty.vtu", &size);
   CHECK(f && strstr(f, "NumberOfPoints=\"0\" NumberOfCells=\"0\""));
   free(f);
 }
@@ -242,7 +226,7 @@ static void test_bad_input(void) {
   struct stat st;
   CHECK(stat("new.vtu", &st) != 0);
   size_t size;
-  char *c = slurp("keep.vtu", &size);
+  char *c = fixture_slurp("keep.vtu", &size);
   CHECK(c && !strcmp(c, "previous"));
   free(c);
   destroy(&m);

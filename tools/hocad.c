@@ -540,6 +540,19 @@ static int measure_stage(const options *o, report *r, const char *name, const ho
   return EXIT_OK;
 }
 
+/* q of every element of `mesh` in a new array *q (freed by the caller, also
+ * on failure), with its statistics if `stats` is not NULL. */
+static int measure_all(const options *o, const hoc_mesh *mesh, double **q,
+                       hoc_quality_stats *stats) {
+  size_t ne = hoc_mesh_num_elements(mesh);
+  if (!(*q = malloc((ne ? ne : 1) * sizeof **q))) {
+    error_line("out of memory");
+    return EXIT_FAILURE_;
+  }
+  hoc_status st = hoc_mesh_measure(mesh, o->measure, *q, NULL, stats);
+  return st == HOC_OK ? EXIT_OK : fail(st, 0);
+}
+
 /* Default output name: the model's base name without extension, _pP.msh, in
  * the current directory. */
 static void default_output(const char *model, int order, char *buf, size_t size) {
@@ -638,17 +651,8 @@ static int write_pictures(const options *o, int n, const hoc_mesh *const *meshes
   const char *titles[3];
   int code = EXIT_OK;
   for (int k = 0; k < n && !code; ++k) {
-    size_t ne = hoc_mesh_num_elements(meshes[k]);
-    if (meshes[k] == final) {
-      q[k] = (double *)final_q;
-    } else if (!(q[k] = malloc((ne ? ne : 1) * sizeof *q[k]))) {
-      error_line("out of memory");
-      code = EXIT_FAILURE_;
-      break;
-    } else {
-      hoc_status st = hoc_mesh_measure(meshes[k], o->measure, q[k], NULL, NULL);
-      if (st != HOC_OK) code = fail(st, 0);
-    }
+    if (meshes[k] == final) q[k] = (double *)final_q;
+    else code = measure_all(o, meshes[k], &q[k], NULL);
     const char *name = n == 2 && k == 1 ? (o->optimize ? "optimized" : "raised") : names[k];
     snprintf(title[k], sizeof title[k], "%s, order %d", name, hoc_mesh_order(meshes[k]));
     titles[k] = title[k];
@@ -791,19 +795,7 @@ static int cmd_mesh(int argc, char **argv) {
     final = written;
   }
   if (!o.quiet) print_table(&r);
-
-  size_t ne = hoc_mesh_num_elements(final);
-  q = calloc(ne ? ne : 1, sizeof *q);
-  if (!q) {
-    error_line("out of memory");
-    code = EXIT_FAILURE_;
-    goto done;
-  }
-  st = hoc_mesh_measure(final, o.measure, q, NULL, NULL);
-  if (st != HOC_OK) {
-    code = fail(st, 0);
-    goto done;
-  }
+  if ((code = measure_all(&o, final, &q, NULL))) goto done;
   t0 = now();
   if ((code = write_outputs(&o, final, q, out))) goto done;
   r.write_seconds = now() - t0;
@@ -932,18 +924,7 @@ static int cmd_optimize(int argc, char **argv) {
     printf("mesh %s on %s: %zu nodes\n", o.mesh_in, o.model, hoc_mesh_num_nodes(mesh));
     print_table(&r);
   }
-  size_t ne = hoc_mesh_num_elements(mesh);
-  q = calloc(ne ? ne : 1, sizeof *q);
-  if (!q) {
-    error_line("out of memory");
-    code = EXIT_FAILURE_;
-    goto done;
-  }
-  st = hoc_mesh_measure(mesh, o.measure, q, NULL, NULL);
-  if (st != HOC_OK) {
-    code = fail(st, 0);
-    goto done;
-  }
+  if ((code = measure_all(&o, mesh, &q, NULL))) goto done;
   if ((code = write_outputs(&o, mesh, q, o.out))) goto done;
   r.nodes = hoc_mesh_num_nodes(mesh);
   if (o.json && (code = write_json(o.json, &o, &r, "optimize"))) goto done;
@@ -1002,16 +983,7 @@ static int cmd_render(int argc, char **argv) {
     code = fail(st, 1);
     goto done;
   }
-  size_t ne = hoc_mesh_num_elements(mesh);
-  if (!(q = malloc((ne ? ne : 1) * sizeof *q))) {
-    error_line("out of memory");
-    code = EXIT_FAILURE_;
-    goto done;
-  }
-  if ((st = hoc_mesh_measure(mesh, o.measure, q, NULL, &s)) != HOC_OK) {
-    code = fail(st, 0);
-    goto done;
-  }
+  if ((code = measure_all(&o, mesh, &q, &s))) goto done;
   const hoc_mesh *views[1] = {mesh};
   const double *qs[1] = {q};
   const char *titles[1] = {base};
