@@ -8,6 +8,8 @@
 #include "test_util.h"
 
 #include <gmshc.h>
+#include <omp.h>
+#include <stdlib.h>
 #include <string.h>
 
 static void test_model(const char *name, double min_linear_q) {
@@ -133,7 +135,72 @@ static void test_bad_input(void) {
   hoc_model_destroy(&model);
 }
 
+/* Evaluations from several threads at once (faces interleaved, and pieces
+ * of one face on different threads) give bit for bit the serial results,
+ * on a model with both concurrent kinds and kinds the backend serialises. */
+static void test_concurrent_eval(const char *name) {
+  char path[1024];
+  snprintf(path, sizeof path, "%s/%s", HOC_MODELS_DIR, name);
+  hoc_model *model;
+  CHECK_OK(hoc_model_open(path, &model));
+  if (!model) return;
+  CHECK(model->thread_safe);
+  enum { N = 400, PIECE = 20 };
+  int ne = model->n_faces + model->n_curves, n_conc = 0;
+  double *par = malloc(sizeof(double) * 2 * N * (size_t)ne);
+  double *ref = malloc(sizeof(double) * 9 * N * (size_t)ne);
+  double *out = malloc(sizeof(double) * 9 * N * (size_t)ne);
+  CHECK(par && ref && out);
+  if (!par || !ref || !out) goto done;
+  srand(7);
+  for (int e = 0; e < ne; ++e) {
+    int face = e < model->n_faces;
+    const double *lo = face ? model->faces[e].lo : &model->curves[e - model->n_faces].lo;
+    const double *hi = face ? model->faces[e].hi : &model->curves[e - model->n_faces].hi;
+    n_conc += face ? model->faces[e].concurrent : model->curves[e - model->n_faces].concurrent;
+    for (int i = 0; i < N; ++i)
+      for (int d = 0; d < 2; ++d) {
+        double r = rand() / (double)RAND_MAX;
+        par[2 * (N * (size_t)e + (size_t)i) + (size_t)d] = face || d == 0 ? lo[d] + r * (hi[d] - lo[d]) : 0;
+      }
+  }
+  CHECK(n_conc > 0 && n_conc < ne); /* both paths are exercised */
+  for (int pass = 0; pass < 2; ++pass) {
+    double *res = pass ? out : ref;
+    int pieces = ne * (N / PIECE), failed = 0;
+#pragma omp parallel for schedule(dynamic, 1) num_threads(pass ? 4 : 1) reduction(+ : failed)
+    for (int k = 0; k < pieces; ++k) {
+      int e = k % ne, at = (k / ne) * PIECE; /* neighbouring pieces on different entities */
+      const double *p = par + 2 * (N * (size_t)e + (size_t)at);
+      double *r = res + 9 * (N * (size_t)e + (size_t)at);
+      double x[3 * PIECE], a[3 * PIECE], b[3 * PIECE], t[PIECE];
+      hoc_status st;
+      if (e < model->n_faces) {
+        st = hoc_cad_face_eval(model, e, PIECE, p, x, a, b);
+      } else {
+        for (int i = 0; i < PIECE; ++i) t[i] = p[2 * i];
+        st = hoc_cad_curve_eval(model, e - model->n_faces, PIECE, t, x, a);
+        memset(b, 0, sizeof b);
+      }
+      failed += st != HOC_OK;
+      for (int i = 0; i < PIECE; ++i) {
+        memcpy(r + 9 * i, x + 3 * i, 3 * sizeof *x);
+        memcpy(r + 9 * i + 3, a + 3 * i, 3 * sizeof *a);
+        memcpy(r + 9 * i + 6, b + 3 * i, 3 * sizeof *b);
+      }
+    }
+    CHECK(failed == 0);
+  }
+  CHECK(memcmp(ref, out, sizeof(double) * 9 * N * (size_t)ne) == 0);
+done:
+  free(par);
+  free(ref);
+  free(out);
+  hoc_model_destroy(&model);
+}
+
 int main(void) {
+  test_concurrent_eval("occt_bottle.brep");
   test_bad_input();
   test_model("gmsh_t20_component8.step", 0.15);
   test_model("screw.step", 0.2);

@@ -25,6 +25,7 @@ typedef struct hoc_cad_face {
   char name[64];         /* kernel's entity name, may be empty */
   double bbox[6];
   int *curves, n_curves; /* boundary curve tags, signed by orientation (for files) */
+  unsigned char concurrent; /* backend evaluates this face from several threads at once */
 } hoc_cad_face;
 
 typedef struct hoc_cad_curve {
@@ -34,6 +35,7 @@ typedef struct hoc_cad_curve {
   int v0, v1;            /* start and end vertex index, -1 if none */
   int degenerate;        /* collapses to a point (pole) */
   double bbox[6];
+  unsigned char concurrent; /* backend evaluates this curve from several threads at once */
 } hoc_cad_curve;
 
 typedef struct hoc_cad_vertex {
@@ -69,7 +71,10 @@ typedef struct hoc_cad_ops {
 struct hoc_model {
   const hoc_cad_ops *ops;
   void *ctx;
-  int thread_safe; /* backend calls may run concurrently */
+  /* Every operation may be called from several threads at once: the backend
+   * lets evaluations of `concurrent` entities run in parallel and serialises
+   * the rest internally. Both backends are; the flag is for future ones. */
+  int thread_safe;
   int is_gmsh;     /* the global gmsh model belongs to this object */
   int n_faces, n_curves, n_vertices;
   hoc_cad_face *faces;

@@ -7,6 +7,12 @@
  * their own (General.Terminal only silences gmsh's logger): calls that may
  * print run with both descriptors redirected to a scratch file, whose first
  * error line goes into our message instead.
+ *
+ * Threads: OpenCASCADE evaluates its elementary and B-spline surfaces and
+ * curves (Geom_*::D0/D1, called by gmsh's getValue/getDerivative) without
+ * mutable state, so these evaluations run concurrently. Every other call
+ * (other surface kinds, whose evaluators keep adaptor caches; projection;
+ * reparametrisation) holds one lock.
  */
 #include "cad/cad.h"
 #include "cad/gmsh_util.h"
@@ -15,6 +21,7 @@
 #include <omp.h>
 
 #include <ctype.h>
+#include <pthread.h>
 #include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -25,6 +32,27 @@
 
 static int gmsh_initialized;
 static int gmsh_model_in_use;
+static pthread_mutex_t gmsh_lock = PTHREAD_MUTEX_INITIALIZER;
+
+static void serial_begin(int needed) {
+  if (needed) pthread_mutex_lock(&gmsh_lock);
+}
+static void serial_end(int needed) {
+  if (needed) pthread_mutex_unlock(&gmsh_lock);
+}
+
+/* Kinds OpenCASCADE evaluates without shared or cached state (gmsh's type names). */
+static int concurrent_kind(int dim, const char *type) {
+  static const char *const surfaces[] = {"Plane", "Cylinder", "Cone", "Sphere", "Torus",
+                                         "BSpline surface", "Bezier surface"};
+  static const char *const curves[] = {"Line", "Circle", "Ellipse", "Hyperbola", "Parabola",
+                                       "BSpline", "Bezier"};
+  const char *const *list = dim == 2 ? surfaces : curves;
+  size_t n = dim == 2 ? sizeof surfaces / sizeof *surfaces : sizeof curves / sizeof *curves;
+  for (size_t i = 0; i < n; ++i)
+    if (!strcmp(type, list[i])) return 1;
+  return 0;
+}
 
 hoc_status hoc_gmsh_error(const char *what) {
   char *msg = NULL;
@@ -121,11 +149,9 @@ void hoc_quiet_end(hoc_quiet *q, char *first_error, size_t size) {
 
 /* Backend operations ----------------------------------------------------- */
 
-static hoc_status gmsh_face_eval(void *ctx, const hoc_cad_face *f, size_t n, const double *uv,
-                                 double *xyz, double *du, double *dv) {
-  (void)ctx;
+static hoc_status gmsh_face_eval_raw(const hoc_cad_face *f, size_t n, const double *uv,
+                                     double *xyz, double *du, double *dv) {
   int ierr = 0;
-  if (!n) return HOC_OK;
   if (xyz) {
     double *x = NULL;
     size_t nx = 0;
@@ -155,11 +181,26 @@ static hoc_status gmsh_face_eval(void *ctx, const hoc_cad_face *f, size_t n, con
   return HOC_OK;
 }
 
-static hoc_status gmsh_curve_eval(void *ctx, const hoc_cad_curve *c, size_t n, const double *t,
-                                  double *xyz, double *dt) {
+static hoc_status gmsh_face_eval(void *ctx, const hoc_cad_face *f, size_t n, const double *uv,
+                                 double *xyz, double *du, double *dv) {
   (void)ctx;
-  int ierr = 0;
   if (!n) return HOC_OK;
+  /* an error message comes from gmsh's global logger: read it under the lock */
+  int lock = !f->concurrent;
+  serial_begin(lock);
+  hoc_status st = gmsh_face_eval_raw(f, n, uv, xyz, du, dv);
+  if (st != HOC_OK && !lock) {
+    serial_begin(1);
+    st = gmsh_face_eval_raw(f, n, uv, xyz, du, dv);
+    serial_end(1);
+  }
+  serial_end(lock);
+  return st;
+}
+
+static hoc_status gmsh_curve_eval_raw(const hoc_cad_curve *c, size_t n, const double *t,
+                                      double *xyz, double *dt) {
+  int ierr = 0;
   if (xyz) {
     double *x = NULL;
     size_t nx = 0;
@@ -185,7 +226,23 @@ static hoc_status gmsh_curve_eval(void *ctx, const hoc_cad_curve *c, size_t n, c
   return HOC_OK;
 }
 
-static hoc_status gmsh_curve_to_face(void *ctx, const hoc_cad_curve *c, const hoc_cad_face *f,
+static hoc_status gmsh_curve_eval(void *ctx, const hoc_cad_curve *c, size_t n, const double *t,
+                                  double *xyz, double *dt) {
+  (void)ctx;
+  if (!n) return HOC_OK;
+  int lock = !c->concurrent;
+  serial_begin(lock);
+  hoc_status st = gmsh_curve_eval_raw(c, n, t, xyz, dt);
+  if (st != HOC_OK && !lock) {
+    serial_begin(1);
+    st = gmsh_curve_eval_raw(c, n, t, xyz, dt);
+    serial_end(1);
+  }
+  serial_end(lock);
+  return st;
+}
+
+static hoc_status gmsh_curve_to_face_unlocked(void *ctx, const hoc_cad_curve *c, const hoc_cad_face *f,
                                      size_t n, const double *t, double *uv) {
   (void)ctx;
   if (!n) return HOC_OK;
@@ -202,7 +259,7 @@ static hoc_status gmsh_curve_to_face(void *ctx, const hoc_cad_curve *c, const ho
   return HOC_OK;
 }
 
-static hoc_status gmsh_vertex_to_face(void *ctx, const hoc_cad_vertex *v, const hoc_cad_face *f,
+static hoc_status gmsh_vertex_to_face_unlocked(void *ctx, const hoc_cad_vertex *v, const hoc_cad_face *f,
                                       double *uv) {
   (void)ctx;
   int ierr = 0;
@@ -219,7 +276,7 @@ static hoc_status gmsh_vertex_to_face(void *ctx, const hoc_cad_vertex *v, const 
   return HOC_OK;
 }
 
-static hoc_status gmsh_face_project(void *ctx, const hoc_cad_face *f, size_t n,
+static hoc_status gmsh_face_project_unlocked(void *ctx, const hoc_cad_face *f, size_t n,
                                     const double *xyz, double *uv) {
   (void)ctx;
   if (!n) return HOC_OK;
@@ -236,7 +293,7 @@ static hoc_status gmsh_face_project(void *ctx, const hoc_cad_face *f, size_t n,
   return HOC_OK;
 }
 
-static hoc_status gmsh_curve_project(void *ctx, const hoc_cad_curve *c, size_t n,
+static hoc_status gmsh_curve_project_unlocked(void *ctx, const hoc_cad_curve *c, size_t n,
                                      const double *xyz, double *t) {
   (void)ctx;
   if (!n) return HOC_OK;
@@ -251,6 +308,35 @@ static hoc_status gmsh_curve_project(void *ctx, const hoc_cad_curve *c, size_t n
   memcpy(t, p, n * sizeof *p);
   gmshFree(p);
   return HOC_OK;
+}
+
+/* reparametrisation and projection: one caller at a time */
+static hoc_status gmsh_curve_to_face(void *ctx, const hoc_cad_curve *c, const hoc_cad_face *f, size_t n, const double *t, double *uv) {
+  serial_begin(1);
+  hoc_status st = gmsh_curve_to_face_unlocked(ctx, c, f, n, t, uv);
+  serial_end(1);
+  return st;
+}
+
+static hoc_status gmsh_vertex_to_face(void *ctx, const hoc_cad_vertex *v, const hoc_cad_face *f, double *uv) {
+  serial_begin(1);
+  hoc_status st = gmsh_vertex_to_face_unlocked(ctx, v, f, uv);
+  serial_end(1);
+  return st;
+}
+
+static hoc_status gmsh_face_project(void *ctx, const hoc_cad_face *f, size_t n, const double *xyz, double *uv) {
+  serial_begin(1);
+  hoc_status st = gmsh_face_project_unlocked(ctx, f, n, xyz, uv);
+  serial_end(1);
+  return st;
+}
+
+static hoc_status gmsh_curve_project(void *ctx, const hoc_cad_curve *c, size_t n, const double *xyz, double *t) {
+  serial_begin(1);
+  hoc_status st = gmsh_curve_project_unlocked(ctx, c, n, xyz, t);
+  serial_end(1);
+  return st;
 }
 
 static void gmsh_destroy(void *ctx) {
@@ -357,6 +443,10 @@ static hoc_status fill_model(hoc_model *m, const int *ftags, const int *ctags, c
     c->tag = ctags[i];
     HOC_TRY(get_bounds(1, c->tag, &c->lo, &c->hi));
     get_bbox(1, c->tag, c->bbox);
+    char *type = NULL;
+    gmshModelGetType(1, c->tag, &type, &ierr);
+    c->concurrent = (unsigned char)(!ierr && type && concurrent_kind(1, type));
+    gmshFree(type);
     int *b = NULL, nb = 0;
     HOC_TRY(get_boundary(1, c->tag, &b, &nb));
     /* gmsh lists a curve's start vertex first */
@@ -380,6 +470,7 @@ static hoc_status fill_model(hoc_model *m, const int *ftags, const int *ctags, c
     char *s = NULL;
     gmshModelGetType(2, f->tag, &s, &ierr);
     if (!ierr && s) snprintf(f->type, sizeof f->type, "%s", s);
+    f->concurrent = (unsigned char)(!ierr && s && concurrent_kind(2, s));
     gmshFree(s);
     s = NULL;
     gmshModelGetEntityName(2, f->tag, &s, &ierr);
@@ -438,7 +529,7 @@ hoc_status hoc_cad_open_gmsh(const char *path, hoc_model **model) {
   HOC_TRY_GOTO(hoc_cad_create((int)nf, (int)nc, (int)nv, &m), fail);
   m->ops = &gmsh_ops;
   m->ctx = NULL;
-  m->thread_safe = 0;
+  m->thread_safe = 1; /* see the lock at the top */
   m->is_gmsh = 1;
   gmsh_model_in_use = 1;
   HOC_TRY_GOTO(fill_model(m, ftags, ctags, vtags), fail);

@@ -35,6 +35,21 @@ void hoc_error_clear(void) {
   error_location[0] = '\0';
 }
 
+void hoc_par_error_catch(hoc_par_error *e, hoc_status st) {
+  if (st == HOC_OK) return;
+#pragma omp critical(hoc_par_error)
+  if (e->status == HOC_OK) {
+    e->status = st;
+    snprintf(e->message, sizeof e->message, "%s", error_message);
+  }
+}
+
+hoc_status hoc_par_error_raise(const hoc_par_error *e) {
+  if (e->status == HOC_OK) return HOC_OK;
+  snprintf(error_message, sizeof error_message, "%s", e->message);
+  return e->status;
+}
+
 const char *hoc_status_string(hoc_status status) {
   switch (status) {
   case HOC_OK: return "ok";

@@ -22,6 +22,19 @@ const char *hoc_last_error_location(void);
 /** Forget the last error of this thread. */
 void hoc_error_clear(void);
 
+/** The first failure inside a parallel region, carried to the calling
+ *  thread (messages are per thread). */
+typedef struct hoc_par_error {
+  hoc_status status;
+  char message[512];
+} hoc_par_error;
+
+/** Keep status st (with this thread's message) if it is the first failure. */
+void hoc_par_error_catch(hoc_par_error *e, hoc_status st);
+
+/** The kept failure as this thread's error (HOC_OK if none). */
+hoc_status hoc_par_error_raise(const hoc_par_error *e);
+
 #define HOC_ERROR(status, ...) hoc_error_set((status), __FILE__, __LINE__, __func__, __VA_ARGS__)
 
 /** Check of the caller's input or of the outside world: always on. */

@@ -1,4 +1,5 @@
-/* Open-addressing hash map with linear probing.
+/* Open-addressing hash map with linear probing; keys and values are stored
+ * side by side so that a probe touches one cache line.
  * SPDX-License-Identifier: GPL-2.0-or-later */
 #include "core/hash.h"
 
@@ -15,16 +16,9 @@ static uint64_t mix(uint64_t k) {
 }
 
 static hoc_status alloc_table(hoc_hash *h, size_t capacity) {
-  h->keys = hoc_calloc(capacity, sizeof *h->keys);
-  h->values = hoc_calloc(capacity, sizeof *h->values);
-  if (!h->keys || !h->values) {
-    free(h->keys);
-    free(h->values);
-    h->keys = NULL;
-    h->values = NULL;
-    return HOC_ERROR(HOC_ERR_MEMORY, "out of memory for a hash table of %zu entries", capacity);
-  }
-  for (size_t i = 0; i < capacity; ++i) h->keys[i] = HOC_HASH_EMPTY;
+  h->slots = hoc_realloc(NULL, capacity, sizeof *h->slots); /* no zeroing: keys set below */
+  HOC_CHECK(h->slots, HOC_ERR_MEMORY, "out of memory for a hash table of %zu entries", capacity);
+  for (size_t i = 0; i < capacity; ++i) h->slots[i].key = HOC_HASH_EMPTY;
   h->capacity = capacity;
   h->count = 0;
   return HOC_OK;
@@ -38,18 +32,16 @@ hoc_status hoc_hash_init(hoc_hash *h, size_t expected) {
 
 void hoc_hash_free(hoc_hash *h) {
   if (!h) return;
-  free(h->keys);
-  free(h->values);
-  h->keys = NULL;
-  h->values = NULL;
+  free(h->slots);
+  h->slots = NULL;
   h->capacity = h->count = 0;
 }
 
 size_t hoc_hash_get(const hoc_hash *h, uint64_t key) {
   size_t mask = h->capacity - 1;
   for (size_t i = mix(key) & mask;; i = (i + 1) & mask) {
-    if (h->keys[i] == key) return h->values[i];
-    if (h->keys[i] == HOC_HASH_EMPTY) return SIZE_MAX;
+    if (h->slots[i].key == key) return h->slots[i].value;
+    if (h->slots[i].key == HOC_HASH_EMPTY) return SIZE_MAX;
   }
 }
 
@@ -57,9 +49,9 @@ static hoc_status grow(hoc_hash *h) {
   hoc_hash old = *h;
   HOC_TRY(alloc_table(h, old.capacity * 2));
   for (size_t i = 0; i < old.capacity; ++i)
-    if (old.keys[i] != HOC_HASH_EMPTY) HOC_TRY(hoc_hash_insert(h, old.keys[i], old.values[i], NULL, NULL));
-  free(old.keys);
-  free(old.values);
+    if (old.slots[i].key != HOC_HASH_EMPTY)
+      HOC_TRY(hoc_hash_insert(h, old.slots[i].key, old.slots[i].value, NULL, NULL));
+  free(old.slots);
   return HOC_OK;
 }
 
@@ -69,14 +61,15 @@ hoc_status hoc_hash_insert(hoc_hash *h, uint64_t key, size_t value, int *found,
   if (2 * (h->count + 1) > h->capacity) HOC_TRY(grow(h));
   size_t mask = h->capacity - 1;
   for (size_t i = mix(key) & mask;; i = (i + 1) & mask) {
-    if (h->keys[i] == key) {
+    hoc_hash_slot *s = &h->slots[i];
+    if (s->key == key) {
       if (found) *found = 1;
-      if (value_out) *value_out = h->values[i];
+      if (value_out) *value_out = s->value;
       return HOC_OK;
     }
-    if (h->keys[i] == HOC_HASH_EMPTY) {
-      h->keys[i] = key;
-      h->values[i] = value;
+    if (s->key == HOC_HASH_EMPTY) {
+      s->key = key;
+      s->value = value;
       h->count++;
       if (found) *found = 0;
       if (value_out) *value_out = value;

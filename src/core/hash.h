@@ -10,9 +10,13 @@
 
 #define HOC_HASH_EMPTY UINT64_MAX
 
+typedef struct hoc_hash_slot {
+  uint64_t key;
+  size_t value;
+} hoc_hash_slot;
+
 typedef struct hoc_hash {
-  uint64_t *keys;
-  size_t *values;
+  hoc_hash_slot *slots; /* key and value side by side: one cache line per probe */
   size_t capacity; /* power of two */
   size_t count;
 } hoc_hash;

@@ -259,25 +259,41 @@ done:
 
 /* Slots ------------------------------------------------------------------ */
 
+/* Slots: one per (node, face) pair an element uses. A node's first pair is
+ * found through first[] without hashing; only nodes on CAD curves and
+ * vertices, which several faces share, need the hash for further faces. */
 static hoc_status build_slots(hoc_mesh *m) {
   int np = m->np;
-  hoc_hash h;
-  HOC_TRY(hoc_hash_init(&h, m->n_nodes + m->n_nodes / 4));
+  hoc_hash h = {0};
   hoc_status status = HOC_OK;
   size_t cap = m->n_nodes + 16, n = 0;
   size_t *node = hoc_calloc(cap, sizeof *node);
   int *face = hoc_calloc(cap, sizeof *face);
-  if (!node || !face) {
+  size_t *first = hoc_calloc(m->n_nodes, sizeof *first);
+  if (!node || !face || !first) {
     status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
     goto fail;
   }
+  size_t shared = 0;
+  for (size_t i = 0; i < m->n_nodes; ++i) {
+    first[i] = SIZE_MAX;
+    shared += m->dim[i] != HOC_ON_FACE;
+  }
+  HOC_TRY_GOTO(hoc_hash_init(&h, shared), fail);
   uint64_t nf = (uint64_t)m->model->n_faces;
   for (size_t e = 0; e < m->n_elems; ++e) {
     int f = m->elem_face[e];
     for (int k = 0; k < np; ++k) {
       size_t i = m->conn[e * (size_t)np + k], s;
-      int found;
-      HOC_TRY_GOTO(hoc_hash_insert(&h, (uint64_t)i * nf + (uint64_t)f, n, &found, &s), fail);
+      int found = 0;
+      if (first[i] == SIZE_MAX) {
+        s = n;
+      } else if (face[first[i]] == f) {
+        s = first[i];
+        found = 1;
+      } else {
+        HOC_TRY_GOTO(hoc_hash_insert(&h, (uint64_t)i * nf + (uint64_t)f, n, &found, &s), fail);
+      }
       if (!found) {
         if (n == cap) {
           cap *= 2;
@@ -290,6 +306,7 @@ static hoc_status build_slots(hoc_mesh *m) {
             goto fail;
           }
         }
+        if (first[i] == SIZE_MAX) first[i] = n;
         node[n] = i;
         face[n] = f;
         ++n;
@@ -298,6 +315,7 @@ static hoc_status build_slots(hoc_mesh *m) {
     }
   }
   hoc_hash_free(&h);
+  free(first);
   m->n_slots = n;
   m->slot_node = node;
   m->slot_face = face;
@@ -309,6 +327,7 @@ fail:
   hoc_hash_free(&h);
   free(node);
   free(face);
+  free(first);
   return status;
 }
 
@@ -790,7 +809,10 @@ hoc_status hoc_mesh_assemble(hoc_model *model, const hoc_mesh_source *src, doubl
     goto fail;
   }
   for (size_t l = 0; l < m->n_lines; ++l) HOC_TRY_GOTO(line_params(m, l), fail);
-  HOC_TRY_GOTO(orient_faces(m), fail);
+  if (src->face_orient)
+    memcpy(m->face_orient, src->face_orient, (size_t)model->n_faces * sizeof *m->face_orient);
+  else
+    HOC_TRY_GOTO(orient_faces(m), fail);
   free(known);
   free(given);
   *out = m;

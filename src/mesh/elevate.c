@@ -22,6 +22,16 @@ typedef struct builder {
   int *ent;
 } builder;
 
+/* Room for n nodes up front (an upper bound: pages never written cost no memory). */
+static hoc_status builder_reserve(builder *b, size_t n) {
+  b->par = hoc_realloc(NULL, 2 * n, sizeof *b->par);
+  b->dim = hoc_realloc(NULL, n, sizeof *b->dim);
+  b->ent = hoc_realloc(NULL, n, sizeof *b->ent);
+  HOC_CHECK(b->par && b->dim && b->ent, HOC_ERR_MEMORY, "out of memory for %zu nodes", n);
+  b->cap = n;
+  return HOC_OK;
+}
+
 static hoc_status builder_add(builder *b, int dim, int entity, double p0, double p1,
                               size_t *index) {
   if (b->n == b->cap) {
@@ -43,6 +53,74 @@ static hoc_status builder_add(builder *b, int dim, int entity, double p0, double
   return HOC_OK;
 }
 
+/* The edges of a triangulation through the lower-numbered vertex of each:
+ * a bucket per vertex, scanned linearly (a vertex has a handful of edges).
+ * Buckets follow the node numbering, which meshers keep local, so this reads
+ * memory nearly in order where a hash table would miss the cache on every
+ * edge. Edges are numbered in order of first appearance. */
+typedef struct edge_table {
+  size_t *start; /* [n_vertices + 1] bucket of each lower vertex */
+  size_t *other; /* [3 ne] higher vertex of each entry, in element order */
+  size_t *id;    /* [3 ne] edge number at an edge's first entry, else SIZE_MAX */
+  size_t n_edges;
+} edge_table;
+
+static void edge_table_free(edge_table *t) {
+  free(t->start);
+  free(t->other);
+  free(t->id);
+}
+
+/* The entry of edge (a, b) in its bucket, or SIZE_MAX. */
+static size_t edge_entry(const edge_table *t, size_t a, size_t b) {
+  size_t lo = a < b ? a : b, hi = a < b ? b : a;
+  for (size_t x = t->start[lo]; x < t->start[lo + 1]; ++x)
+    if (t->other[x] == hi) return x;
+  return SIZE_MAX;
+}
+
+/* Edge table of the elements' corners (conn with `stride` nodes per element,
+ * nn nodes); elem_edge[3 e + k] is the number of element e's edge k (from
+ * corner k to k + 1) and first[3 e + k] says whether e is where it appears
+ * first. */
+static hoc_status edge_table_build(edge_table *t, const size_t *conn, size_t ne, int stride,
+                                   size_t nn, size_t *elem_edge, unsigned char *first) {
+  *t = (edge_table){0};
+  size_t *fill = hoc_calloc(nn + 1, sizeof *fill);
+  t->start = hoc_calloc(nn + 1, sizeof *t->start);
+  t->other = hoc_realloc(NULL, 3 * ne + 1, sizeof *t->other);
+  t->id = hoc_realloc(NULL, 3 * ne + 1, sizeof *t->id);
+  if (!fill || !t->start || !t->other || !t->id) {
+    free(fill);
+    edge_table_free(t);
+    return HOC_ERROR(HOC_ERR_MEMORY, "out of memory for the edges of %zu elements", ne);
+  }
+  for (size_t e = 0; e < ne; ++e)
+    for (int k = 0; k < 3; ++k) {
+      size_t a = conn[e * (size_t)stride + k], b = conn[e * (size_t)stride + (k + 1) % 3];
+      t->start[(a < b ? a : b) + 1]++;
+    }
+  for (size_t v = 0; v < nn; ++v) t->start[v + 1] += t->start[v];
+  memcpy(fill, t->start, (nn + 1) * sizeof *fill);
+  for (size_t e = 0; e < ne; ++e)
+    for (int k = 0; k < 3; ++k) {
+      size_t a = conn[e * (size_t)stride + k], b = conn[e * (size_t)stride + (k + 1) % 3];
+      size_t x = fill[a < b ? a : b]++;
+      t->other[x] = a < b ? b : a;
+      t->id[x] = SIZE_MAX;
+    }
+  free(fill);
+  for (size_t e = 0; e < ne; ++e)
+    for (int k = 0; k < 3; ++k) {
+      size_t a = conn[e * (size_t)stride + k], b = conn[e * (size_t)stride + (k + 1) % 3];
+      size_t x = edge_entry(t, a, b);
+      first[3 * e + (size_t)k] = t->id[x] == SIZE_MAX;
+      if (first[3 * e + (size_t)k]) t->id[x] = t->n_edges++;
+      elem_edge[3 * e + (size_t)k] = t->id[x];
+    }
+  return HOC_OK;
+}
+
 /* Re-interpolation: the new mesh of order p on node set `set` evaluates
  * each source element's parametric map at the new reference nodes. Nodes
  * on CAD curves are interpolated in the curve's parameter t along the edge;
@@ -56,10 +134,13 @@ static hoc_status reinterpolate(const hoc_mesh *in, int p, hoc_nodeset set, hoc_
   double *rs = NULL, *s = NULL, *rs_in = NULL, *s_in = NULL, *Nsrc = NULL, *L = NULL;
   double *edge_t = NULL, *edge_uv = NULL;
   size_t *vmap = NULL, *conn = NULL, *lconn = NULL, *edge_first = NULL, *edge_a = NULL;
+  size_t *elem_edge = NULL;
+  unsigned char *edge_new = NULL;
+  edge_table edges = {0};
   int *lcurve = NULL;
   hoc_lagrange *basis = NULL;
   builder b = {0};
-  hoc_hash edges = {0}, lines = {0};
+  hoc_hash lines = {0};
   hoc_status status = HOC_OK;
   HOC_ALLOC_GOTO(rs, 2 * (size_t)np, done);
   HOC_ALLOC_GOTO(s, (size_t)p + 1, done);
@@ -80,7 +161,11 @@ static hoc_status reinterpolate(const hoc_mesh *in, int p, hoc_nodeset set, hoc_
   HOC_ALLOC_GOTO(edge_first, 3 * ne, done);
   HOC_ALLOC_GOTO(edge_a, 3 * ne, done);
   for (size_t i = 0; i < in->n_nodes; ++i) vmap[i] = SIZE_MAX;
-  HOC_TRY_GOTO(hoc_hash_init(&edges, 2 * ne), done);
+  HOC_TRY_GOTO(builder_reserve(&b, in->n_nodes + ne * (3 * (size_t)(p - 1) + (size_t)(np - 3 * p))),
+               done);
+  HOC_ALLOC_GOTO(elem_edge, 3 * ne, done);
+  HOC_ALLOC_GOTO(edge_new, 3 * ne, done);
+  HOC_TRY_GOTO(edge_table_build(&edges, in->conn, ne, npi, in->n_nodes, elem_edge, edge_new), done);
   HOC_TRY_GOTO(hoc_hash_init(&lines, in->n_lines), done);
   for (size_t l = 0; l < in->n_lines; ++l) {
     const size_t *ln = in->line_conn + l * (size_t)(pin + 1);
@@ -96,7 +181,6 @@ static hoc_status reinterpolate(const hoc_mesh *in, int p, hoc_nodeset set, hoc_
                      done);
       conn[e * (size_t)np + k] = vmap[i];
     }
-  size_t n_edges = 0;
   for (size_t e = 0; e < ne; ++e) {
     int f = in->elem_face[e];
     const hoc_cad_face *face = &model->faces[f];
@@ -106,20 +190,17 @@ static hoc_status reinterpolate(const hoc_mesh *in, int p, hoc_nodeset set, hoc_
     size_t *out_cn = conn + e * (size_t)np;
     for (int k = 0; k < 3 && p > 1; ++k) {
       int ka = k, kb = (k + 1) % 3;
-      size_t a = cn[ka], bb = cn[kb], id;
-      int found;
-      HOC_TRY_GOTO(hoc_hash_insert(&edges, hoc_pair_key(a, bb), n_edges, &found, &id), done);
+      size_t a = cn[ka], bb = cn[kb], id = elem_edge[3 * e + (size_t)k];
       size_t *dst = out_cn + 3 + (size_t)k * (p - 1);
-      if (found) {
+      if (!edge_new[3 * e + (size_t)k]) {
         /* created by a neighbour: same nodes, walked in its direction or back */
         int same = edge_a[id] == a;
         for (int j = 0; j < p - 1; ++j)
           dst[j] = edge_first[id] + (size_t)(same ? j : p - 2 - j);
         continue;
       }
-      edge_a[n_edges] = a;
-      edge_first[n_edges] = b.n;
-      ++n_edges;
+      edge_a[id] = a;
+      edge_first[id] = b.n;
       /* the source edge's nodes from a to b: local indices */
       int loc[HOC_MAX_ORDER + 1];
       loc[0] = ka;
@@ -202,7 +283,8 @@ static hoc_status reinterpolate(const hoc_mesh *in, int p, hoc_nodeset set, hoc_
   HOC_ALLOC_GOTO(lcurve, in->n_lines + 1, done);
   for (size_t l = 0; l < in->n_lines; ++l) {
     const size_t *ln = in->line_conn + l * (size_t)(pin + 1);
-    size_t id = hoc_hash_get(&edges, hoc_pair_key(ln[0], ln[1]));
+    size_t x = edge_entry(&edges, ln[0], ln[1]);
+    size_t id = x == SIZE_MAX ? SIZE_MAX : edges.id[x];
     if (p > 1 && id == SIZE_MAX) continue; /* a curve no element touches */
     if (vmap[ln[0]] == SIZE_MAX || vmap[ln[1]] == SIZE_MAX) continue;
     size_t *dst = lconn + nl * (size_t)(p + 1);
@@ -225,6 +307,7 @@ static hoc_status reinterpolate(const hoc_mesh *in, int p, hoc_nodeset set, hoc_
   src.n_lines = nl;
   src.line_conn = lconn;
   src.line_curve = lcurve;
+  src.face_orient = in->face_orient; /* same faces, same elements: same orientation */
   HOC_TRY_GOTO(hoc_mesh_assemble(in->model, &src, INFINITY, out), done);
   if (in->n_failed_faces) {
     (*out)->failed_faces = hoc_calloc((size_t)in->n_failed_faces, sizeof(int));
@@ -255,7 +338,9 @@ done:
   free(b.par);
   free(b.dim);
   free(b.ent);
-  hoc_hash_free(&edges);
+  edge_table_free(&edges);
+  free(elem_edge);
+  free(edge_new);
   hoc_hash_free(&lines);
   return status;
 }

@@ -107,6 +107,27 @@ static hoc_status group_nodes(const hoc_mesh *m, int dim, int n_entities, size_t
   return HOC_OK;
 }
 
+/* Work split for evaluating entity groups on several threads: pieces of at
+ * most CHUNK items, each within one entity. */
+enum { CHUNK = 1024 };
+
+static hoc_status make_chunks(const size_t *start, int n_ent, size_t **chunk_out, size_t *n_out) {
+  size_t n = 0;
+  for (int e = 0; e < n_ent; ++e) n += (start[e + 1] - start[e] + CHUNK - 1) / CHUNK;
+  size_t *chunk;
+  HOC_ALLOC(chunk, 2 * n + 2);
+  size_t k = 0;
+  for (int e = 0; e < n_ent; ++e)
+    for (size_t a = start[e]; a < start[e + 1]; a += CHUNK) {
+      chunk[2 * k] = (size_t)e;
+      chunk[2 * k + 1] = a;
+      ++k;
+    }
+  *chunk_out = chunk;
+  *n_out = n;
+  return HOC_OK;
+}
+
 /* Positions of the nodes of one dimension from their parameters; xyz[n][3]. */
 static hoc_status eval_nodes(const hoc_mesh *m, int dim, double *xyz) {
   const hoc_model *model = m->model;
@@ -117,35 +138,43 @@ static hoc_status eval_nodes(const hoc_mesh *m, int dim, double *xyz) {
     return HOC_OK;
   }
   int n_ent = dim == HOC_ON_FACE ? model->n_faces : model->n_curves;
-  size_t *start = NULL, *order = NULL;
+  size_t *start = NULL, *order = NULL, *chunk = NULL, n_chunks = 0;
   HOC_TRY(group_nodes(m, dim, n_ent, &start, &order));
-  size_t n_max = 0;
-  for (int e = 0; e < n_ent; ++e)
-    if (start[e + 1] - start[e] > n_max) n_max = start[e + 1] - start[e];
-  double *par = hoc_calloc(2 * n_max, sizeof *par), *x = hoc_calloc(3 * n_max, sizeof *x);
-  hoc_status status = HOC_OK;
-  if (!par || !x) {
-    status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
-    goto done;
-  }
-  for (int e = 0; e < n_ent; ++e) {
-    size_t n = start[e + 1] - start[e];
-    if (!n) continue;
-    const size_t *nodes = order + start[e];
-    if (dim == HOC_ON_FACE) {
-      for (size_t k = 0; k < n; ++k) memcpy(par + 2 * k, m->param + 2 * nodes[k], 2 * sizeof *par);
-      HOC_TRY_GOTO(hoc_cad_face_eval(model, e, n, par, x, NULL, NULL), done);
-    } else {
-      for (size_t k = 0; k < n; ++k) par[k] = m->param[2 * nodes[k]];
-      HOC_TRY_GOTO(hoc_cad_curve_eval(model, e, n, par, x, NULL), done);
+  hoc_status status = make_chunks(start, n_ent, &chunk, &n_chunks);
+  hoc_par_error err = {0};
+  if (status == HOC_OK) {
+#pragma omp parallel if (n_chunks > 1 && model->thread_safe)
+    {
+      double *par = malloc(2 * CHUNK * sizeof *par), *x = malloc(3 * CHUNK * sizeof *x);
+      if (!par || !x) hoc_par_error_catch(&err, HOC_ERROR(HOC_ERR_MEMORY, "out of memory"));
+#pragma omp for schedule(dynamic, 1)
+      for (size_t c = 0; c < n_chunks; ++c) {
+        if (!par || !x || err.status != HOC_OK) continue;
+        int e = (int)chunk[2 * c];
+        size_t a = chunk[2 * c + 1], n = start[e + 1] - a < CHUNK ? start[e + 1] - a : CHUNK;
+        const size_t *nodes = order + a;
+        hoc_status st;
+        if (dim == HOC_ON_FACE) {
+          for (size_t k = 0; k < n; ++k) memcpy(par + 2 * k, m->param + 2 * nodes[k], 2 * sizeof *par);
+          st = hoc_cad_face_eval(model, e, n, par, x, NULL, NULL);
+        } else {
+          for (size_t k = 0; k < n; ++k) par[k] = m->param[2 * nodes[k]];
+          st = hoc_cad_curve_eval(model, e, n, par, x, NULL);
+        }
+        if (st != HOC_OK) {
+          hoc_par_error_catch(&err, st);
+          continue;
+        }
+        for (size_t k = 0; k < n; ++k) memcpy(xyz + 3 * nodes[k], x + 3 * k, 3 * sizeof *x);
+      }
+      free(par);
+      free(x);
     }
-    for (size_t k = 0; k < n; ++k) memcpy(xyz + 3 * nodes[k], x + 3 * k, 3 * sizeof *x);
+    status = hoc_par_error_raise(&err);
   }
-done:
   free(start);
   free(order);
-  free(par);
-  free(x);
+  free(chunk);
   return status;
 }
 
@@ -181,16 +210,41 @@ static void nudge_inside(const hoc_cad_face *f, const double *uv, double *out) {
   }
 }
 
+/* Unit normal (oriented as the mesh) of face f at uv, from its derivatives
+ * du, dv there; at a singular point not flagged as a pole, look just
+ * inside the face. */
+static hoc_status slot_normal(const hoc_model *model, int f, const double *uv, const double *a,
+                              const double *b, double sign, double *normal) {
+  double c[3];
+  c[0] = a[1] * b[2] - a[2] * b[1];
+  c[1] = a[2] * b[0] - a[0] * b[2];
+  c[2] = a[0] * b[1] - a[1] * b[0];
+  double len = sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+  double scale = a[0] * a[0] + a[1] * a[1] + a[2] * a[2] + b[0] * b[0] + b[1] * b[1] + b[2] * b[2];
+  if (!(len > 1e-10 * scale)) {
+    double p[2], a2[3], b2[3];
+    nudge_inside(&model->faces[f], uv, p);
+    HOC_TRY(hoc_cad_face_eval(model, f, 1, p, NULL, a2, b2));
+    c[0] = a2[1] * b2[2] - a2[2] * b2[1];
+    c[1] = a2[2] * b2[0] - a2[0] * b2[2];
+    c[2] = a2[0] * b2[1] - a2[1] * b2[0];
+    len = sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+  }
+  double inv = len > 0 ? sign / len : 0.0;
+  for (int d = 0; d < 3; ++d) normal[d] = c[d] * inv;
+  return HOC_OK;
+}
+
 hoc_status hoc_mesh_slot_normals(const hoc_mesh *m, double *normal) {
   const hoc_model *model = m->model;
   int nf = model->n_faces;
   /* slots grouped per face */
-  size_t *start, *order;
+  size_t *start, *order, *chunk = NULL, n_chunks = 0;
   HOC_ALLOC(start, (size_t)nf + 1);
   order = hoc_calloc(m->n_slots, sizeof *order);
   size_t *fill = hoc_calloc((size_t)nf + 1, sizeof *fill);
-  double *du = NULL, *dv = NULL, *uv = NULL;
   hoc_status status = HOC_OK;
+  hoc_par_error err = {0};
   if (!order || !fill) {
     status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
     goto done;
@@ -199,58 +253,41 @@ hoc_status hoc_mesh_slot_normals(const hoc_mesh *m, double *normal) {
   for (int f = 0; f < nf; ++f) start[f + 1] += start[f];
   memcpy(fill, start, ((size_t)nf + 1) * sizeof *fill);
   for (size_t s = 0; s < m->n_slots; ++s) order[fill[m->slot_face[s]]++] = s;
-  size_t n_max = 0;
-  for (int f = 0; f < nf; ++f)
-    if (start[f + 1] - start[f] > n_max) n_max = start[f + 1] - start[f];
-  uv = hoc_calloc(2 * n_max, sizeof *uv);
-  du = hoc_calloc(3 * n_max, sizeof *du);
-  dv = hoc_calloc(3 * n_max, sizeof *dv);
-  if (!uv || !du || !dv) {
-    status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
-    goto done;
-  }
-  for (int f = 0; f < nf; ++f) {
-    size_t n = start[f + 1] - start[f];
-    if (!n) continue;
-    const hoc_cad_face *face = &model->faces[f];
-    double sign = m->face_orient[f] < 0 ? -1.0 : 1.0;
-    for (size_t k = 0; k < n; ++k) {
-      size_t s = order[start[f] + k];
-      if (m->slot_pole[s])
-        nudge_inside(face, m->slot_uv + 2 * s, uv + 2 * k);
-      else
-        memcpy(uv + 2 * k, m->slot_uv + 2 * s, 2 * sizeof *uv);
-    }
-    HOC_TRY_GOTO(hoc_cad_face_eval(model, f, n, uv, NULL, du, dv), done);
-    for (size_t k = 0; k < n; ++k) {
-      size_t s = order[start[f] + k];
-      double *a = du + 3 * k, *b = dv + 3 * k, c[3];
-      c[0] = a[1] * b[2] - a[2] * b[1];
-      c[1] = a[2] * b[0] - a[0] * b[2];
-      c[2] = a[0] * b[1] - a[1] * b[0];
-      double len = sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
-      double scale = a[0] * a[0] + a[1] * a[1] + a[2] * a[2] + b[0] * b[0] + b[1] * b[1] +
-                     b[2] * b[2];
-      if (!(len > 1e-10 * scale)) {
-        /* singular point not flagged as a pole: look just inside the face */
-        double p[2], a2[3], b2[3];
-        nudge_inside(face, uv + 2 * k, p);
-        HOC_TRY_GOTO(hoc_cad_face_eval(model, f, 1, p, NULL, a2, b2), done);
-        c[0] = a2[1] * b2[2] - a2[2] * b2[1];
-        c[1] = a2[2] * b2[0] - a2[0] * b2[2];
-        c[2] = a2[0] * b2[1] - a2[1] * b2[0];
-        len = sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+  HOC_TRY_GOTO(make_chunks(start, nf, &chunk, &n_chunks), done);
+#pragma omp parallel if (n_chunks > 1 && model->thread_safe)
+  {
+    double *uv = malloc(2 * CHUNK * sizeof *uv), *du = malloc(3 * CHUNK * sizeof *du),
+           *dv = malloc(3 * CHUNK * sizeof *dv);
+    if (!uv || !du || !dv) hoc_par_error_catch(&err, HOC_ERROR(HOC_ERR_MEMORY, "out of memory"));
+#pragma omp for schedule(dynamic, 1)
+    for (size_t c = 0; c < n_chunks; ++c) {
+      if (!uv || !du || !dv || err.status != HOC_OK) continue;
+      int f = (int)chunk[2 * c];
+      size_t a = chunk[2 * c + 1], n = start[f + 1] - a < CHUNK ? start[f + 1] - a : CHUNK;
+      const hoc_cad_face *face = &model->faces[f];
+      double sign = m->face_orient[f] < 0 ? -1.0 : 1.0;
+      for (size_t k = 0; k < n; ++k) {
+        size_t s = order[a + k];
+        if (m->slot_pole[s])
+          nudge_inside(face, m->slot_uv + 2 * s, uv + 2 * k);
+        else
+          memcpy(uv + 2 * k, m->slot_uv + 2 * s, 2 * sizeof *uv);
       }
-      double inv = len > 0 ? sign / len : 0.0;
-      for (int d = 0; d < 3; ++d) normal[3 * s + d] = c[d] * inv;
+      hoc_status st = hoc_cad_face_eval(model, f, n, uv, NULL, du, dv);
+      for (size_t k = 0; k < n && st == HOC_OK; ++k)
+        st = slot_normal(model, f, uv + 2 * k, du + 3 * k, dv + 3 * k, sign,
+                         normal + 3 * order[a + k]);
+      hoc_par_error_catch(&err, st);
     }
+    free(uv);
+    free(du);
+    free(dv);
   }
+  status = hoc_par_error_raise(&err);
 done:
   free(start);
   free(order);
   free(fill);
-  free(uv);
-  free(du);
-  free(dv);
+  free(chunk);
   return status;
 }

@@ -72,6 +72,8 @@ typedef struct hoc_mesh_source {
   const size_t *node_tag;    /* [n] node labels for messages (file tags), or NULL */
   int keep_xyz;              /* keep the given positions (a file measured as written);
                                 otherwise positions are recomputed from the parameters */
+  const signed char *face_orient; /* [n_faces] known orientation (a mesh raised from one
+                                     that has it), or NULL: found from the elements */
 } hoc_mesh_source;
 
 /** Build a mesh from a triangulation: locate nodes without parameters on
