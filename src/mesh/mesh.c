@@ -107,24 +107,23 @@ static hoc_status group_nodes(const hoc_mesh *m, int dim, int n_entities, size_t
   return HOC_OK;
 }
 
-/* Work split for evaluating entity groups on several threads: pieces of at
- * most CHUNK items, each within one entity. */
 enum { CHUNK = 1024 };
 
-static hoc_status make_chunks(const size_t *start, int n_ent, size_t **chunk_out, size_t *n_out) {
+hoc_status hoc_split_groups(const size_t *start, int n_groups, size_t size, size_t **pieces,
+                            size_t *n_pieces) {
   size_t n = 0;
-  for (int e = 0; e < n_ent; ++e) n += (start[e + 1] - start[e] + CHUNK - 1) / CHUNK;
-  size_t *chunk;
-  HOC_ALLOC(chunk, 2 * n + 2);
+  for (int g = 0; g < n_groups; ++g) n += (start[g + 1] - start[g] + size - 1) / size;
+  size_t *piece;
+  HOC_ALLOC(piece, 2 * n + 2);
   size_t k = 0;
-  for (int e = 0; e < n_ent; ++e)
-    for (size_t a = start[e]; a < start[e + 1]; a += CHUNK) {
-      chunk[2 * k] = (size_t)e;
-      chunk[2 * k + 1] = a;
+  for (int g = 0; g < n_groups; ++g)
+    for (size_t a = start[g]; a < start[g + 1]; a += size) {
+      piece[2 * k] = (size_t)g;
+      piece[2 * k + 1] = a;
       ++k;
     }
-  *chunk_out = chunk;
-  *n_out = n;
+  *pieces = piece;
+  *n_pieces = n;
   return HOC_OK;
 }
 
@@ -140,7 +139,7 @@ static hoc_status eval_nodes(const hoc_mesh *m, int dim, double *xyz) {
   int n_ent = dim == HOC_ON_FACE ? model->n_faces : model->n_curves;
   size_t *start = NULL, *order = NULL, *chunk = NULL, n_chunks = 0;
   HOC_TRY(group_nodes(m, dim, n_ent, &start, &order));
-  hoc_status status = make_chunks(start, n_ent, &chunk, &n_chunks);
+  hoc_status status = hoc_split_groups(start, n_ent, CHUNK, &chunk, &n_chunks);
   hoc_par_error err = {0};
   if (status == HOC_OK) {
 #pragma omp parallel if (n_chunks > 1 && model->thread_safe)
@@ -253,7 +252,7 @@ hoc_status hoc_mesh_slot_normals(const hoc_mesh *m, double *normal) {
   for (int f = 0; f < nf; ++f) start[f + 1] += start[f];
   memcpy(fill, start, ((size_t)nf + 1) * sizeof *fill);
   for (size_t s = 0; s < m->n_slots; ++s) order[fill[m->slot_face[s]]++] = s;
-  HOC_TRY_GOTO(make_chunks(start, nf, &chunk, &n_chunks), done);
+  HOC_TRY_GOTO(hoc_split_groups(start, nf, CHUNK, &chunk, &n_chunks), done);
 #pragma omp parallel if (n_chunks > 1 && model->thread_safe)
   {
     double *uv = malloc(2 * CHUNK * sizeof *uv), *du = malloc(3 * CHUNK * sizeof *du),

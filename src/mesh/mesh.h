@@ -98,6 +98,12 @@ hoc_status hoc_mesh_convert_nodeset(const hoc_mesh *mesh, hoc_nodeset set, hoc_m
 /** Evaluate node positions from parameters (all nodes). */
 hoc_status hoc_mesh_update_xyz(hoc_mesh *mesh);
 
+/** Work split for evaluating grouped items on several threads: items
+ *  start[g]..start[g+1] of each group g in pieces of at most `size`, each
+ *  within one group; pieces[2k] is the group, pieces[2k+1] the first item. */
+hoc_status hoc_split_groups(const size_t *start, int n_groups, size_t size, size_t **pieces,
+                            size_t *n_pieces);
+
 /** Unit normals at every slot (oriented by face_orient, NaN-free: at a pole
  *  the normal comes from the nearby interior of the face). normal[n_slots][3]. */
 hoc_status hoc_mesh_slot_normals(const hoc_mesh *mesh, double *normal);

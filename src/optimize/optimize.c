@@ -67,6 +67,13 @@ typedef struct blockset {
   int n_colors;
   size_t *color_start;  /* [n_colors+1] */
   size_t *color_block;
+  /* Blocks woken since their colour last ran, per colour (most sleep: a
+   * colour then looks at these instead of all its blocks) */
+  int *block_color;     /* [n_blocks] */
+  size_t *queue_head;   /* [n_colors] first queued block, SIZE_MAX if none */
+  size_t *queue_next;   /* [n_blocks] next in its colour's queue */
+  unsigned char *queued;    /* [n_blocks] */
+  unsigned char *scan_all;  /* [n_colors] every block may be active: look at all */
 } blockset;
 
 typedef struct opt {
@@ -114,6 +121,7 @@ typedef struct opt {
   double *slope;        /* [n_blocks] g . step (< 0) */
   unsigned char *state; /* [n_blocks] 0 idle, 1 trying, 2 accepted */
   size_t *list;         /* [n_blocks] scratch */
+  size_t *committed;    /* [n_blocks] blocks of the current colour that moved */
   double *tpar;         /* [n_nodes][2] trial parameters */
   double *txyz;         /* [n_nodes][3] */
   double *tdz;          /* [n_nodes][6] */
@@ -130,13 +138,14 @@ static void opt_free(opt *o) {
     blockset *b = &o->fam[f];
     void *q[] = {b->bn_start, b->bn_node, b->be_start,   b->be_elem,    b->bd_start,
                  b->node_block, b->node_off, b->carry_start, b->carry_node, b->carry_w,
-                 b->color_start, b->color_block};
+                 b->color_start, b->color_block, b->block_color, b->queue_head,
+                 b->queue_next, b->queued, b->scan_all};
     for (size_t i = 0; i < sizeof q / sizeof *q; ++i) free(q[i]);
   }
   void *p[] = {o->ndof, o->ne_start, o->ne_elem, o->ne_local, o->ns_start, o->ns_slot,
                o->nl_start, o->nl_line, o->dz, o->normal, o->delta, o->valid, o->pvalid, o->on_boundary,
                o->region, o->was_region, o->dirty, o->delta_own, o->fe, o->qe, o->hsize, o->active, o->moving, o->step, o->alpha, o->f0, o->fnew,
-               o->slope, o->state, o->list, o->tpar, o->txyz, o->tdz, o->tslot_uv, o->tnormal};
+               o->slope, o->state, o->list, o->committed, o->tpar, o->txyz, o->tdz, o->tslot_uv, o->tnormal};
   for (size_t i = 0; i < sizeof p / sizeof *p; ++i) free(p[i]);
 }
 
@@ -408,6 +417,20 @@ static hoc_status build_blocks(opt *o, int family) {
       for (size_t b = 0; b < nb; ++b) o->B->color_block[o->B->color_start[color[b]]++] = b;
       csr_restore((size_t)max_colors, o->B->color_start);
     }
+    if (status == HOC_OK) {
+      o->B->block_color = color;
+      color = NULL;
+      o->B->queue_head = hoc_calloc((size_t)max_colors + 1, sizeof *o->B->queue_head);
+      o->B->queue_next = hoc_calloc(nb + 1, sizeof *o->B->queue_next);
+      o->B->queued = hoc_calloc(nb + 1, 1);
+      o->B->scan_all = hoc_calloc((size_t)max_colors + 1, 1);
+      if (!o->B->queue_head || !o->B->queue_next || !o->B->queued || !o->B->scan_all)
+        status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
+      for (int c = 0; c < max_colors && status == HOC_OK; ++c) {
+        o->B->queue_head[c] = SIZE_MAX;
+        o->B->scan_all[c] = 1;
+      }
+    }
     free(color);
     free(stamp);
   }
@@ -491,6 +514,7 @@ static hoc_status setup(opt *o, hoc_mesh *m, hoc_measure measure, int fix_curves
   HOC_ALLOC(o->slope, nb + 1);
   HOC_ALLOC(o->state, nb + 1);
   HOC_ALLOC(o->list, nb + 1);
+  HOC_ALLOC(o->committed, nb + 1);
   HOC_ALLOC(o->tpar, 2 * nn);
   HOC_ALLOC(o->txyz, 3 * nn);
   HOC_ALLOC(o->tdz, 6 * nn);
@@ -534,23 +558,33 @@ static hoc_status eval_all(opt *o) {
     order[start[g]++] = i;
   }
   csr_restore((size_t)(nf + nc), start);
-  for (int g = 0; g < nf + nc; ++g) {
-    size_t n = start[g + 1] - start[g];
-    if (!n) continue;
-    const size_t *nodes = order + start[g];
+  size_t *piece = NULL, n_pieces = 0;
+  HOC_TRY_GOTO(hoc_split_groups(start, nf + nc, 1024, &piece, &n_pieces), done);
+  hoc_par_error err = {0};
+#pragma omp parallel for schedule(dynamic, 1)
+  for (size_t c = 0; c < n_pieces; ++c) {
+    int g = (int)piece[2 * c];
+    size_t first = piece[2 * c + 1], n = start[g + 1] - first < 1024 ? start[g + 1] - first : 1024;
+    const size_t *nodes = order + first;
+    /* this piece's part of the work arrays */
+    double *pp = par + 2 * first, *pa = a + 3 * first, *pb = b + 3 * first;
+    hoc_status st;
     if (g < nf) {
-      for (size_t k = 0; k < n; ++k) memcpy(par + 2 * k, m->param + 2 * nodes[k], 2 * sizeof *par);
-      HOC_TRY_GOTO(hoc_cad_face_eval(o->model, g, n, par, NULL, a, b), done);
+      for (size_t k = 0; k < n; ++k) memcpy(pp + 2 * k, m->param + 2 * nodes[k], 2 * sizeof *pp);
+      st = hoc_cad_face_eval(o->model, g, n, pp, NULL, pa, pb);
     } else {
-      for (size_t k = 0; k < n; ++k) par[k] = m->param[2 * nodes[k]];
-      HOC_TRY_GOTO(hoc_cad_curve_eval(o->model, g - nf, n, par, NULL, a), done);
-      memset(b, 0, 3 * n * sizeof *b);
+      for (size_t k = 0; k < n; ++k) pp[k] = m->param[2 * nodes[k]];
+      st = hoc_cad_curve_eval(o->model, g - nf, n, pp, NULL, pa);
+      memset(pb, 0, 3 * n * sizeof *pb);
     }
-    for (size_t k = 0; k < n; ++k) {
-      memcpy(o->dz + 6 * nodes[k], a + 3 * k, 3 * sizeof *a);
-      memcpy(o->dz + 6 * nodes[k] + 3, b + 3 * k, 3 * sizeof *b);
+    hoc_par_error_catch(&err, st);
+    for (size_t k = 0; k < n && st == HOC_OK; ++k) {
+      memcpy(o->dz + 6 * nodes[k], pa + 3 * k, 3 * sizeof *pa);
+      memcpy(o->dz + 6 * nodes[k] + 3, pb + 3 * k, 3 * sizeof *pb);
     }
   }
+  free(piece);
+  status = hoc_par_error_raise(&err);
 done:
   free(start);
   free(order);
@@ -754,51 +788,52 @@ static void trial_elem_uv(const opt *o, size_t k, size_t e, int kk, double *uv) 
   hoc_cad_face_unwrap_near(&o->model->faces[m->elem_face[e]], cur, uv);
 }
 
-/* CAD evaluation of the trial parameters of the nodes in list[0..n). */
-static hoc_status eval_trials(opt *o, const size_t *list, size_t n) {
+/* CAD evaluation of node i's trial parameters: position, derivatives, and
+ * the parameters and normals of its slots. */
+static hoc_status eval_trial(opt *o, size_t i) {
   hoc_mesh *m = o->m;
   const hoc_model *model = o->model;
-  for (size_t a = 0; a < n;) {
-    /* runs of nodes on one entity (the list is sorted by entity) */
-    size_t k = list[a], b = a;
-    while (b < n && m->dim[list[b]] == m->dim[k] && m->entity[list[b]] == m->entity[k]) ++b;
-    int ent = m->entity[k];
-    for (size_t c = a; c < b; ++c) {
-      size_t i = list[c];
-      if (m->dim[i] == HOC_ON_FACE) {
-        HOC_TRY(hoc_cad_face_eval(model, ent, 1, o->tpar + 2 * i, o->txyz + 3 * i, o->tdz + 6 * i,
-                                  o->tdz + 6 * i + 3));
-        size_t s = o->ns_slot[o->ns_start[i]];
-        o->tslot_uv[2 * s] = o->tpar[2 * i];
-        o->tslot_uv[2 * s + 1] = o->tpar[2 * i + 1];
-        HOC_TRY(face_normal(o, ent, o->tpar + 2 * i, o->tdz + 6 * i, o->tdz + 6 * i + 3,
-                            o->tnormal + 3 * s));
-      } else {
-        HOC_TRY(hoc_cad_curve_eval(model, ent, 1, o->tpar + 2 * i, o->txyz + 3 * i, o->tdz + 6 * i));
-        o->tdz[6 * i + 3] = o->tdz[6 * i + 4] = o->tdz[6 * i + 5] = 0;
-        for (size_t j = o->ns_start[i]; j < o->ns_start[i + 1]; ++j) {
-          size_t s = o->ns_slot[j];
-          int f = m->slot_face[s];
-          double uv[2], du[3], dv[3];
-          HOC_TRY(hoc_cad_curve_to_face(model, ent, f, 1, o->tpar + 2 * i, uv));
-          hoc_cad_face_unwrap_near(&model->faces[f], m->slot_uv + 2 * s, uv);
-          HOC_TRY(hoc_cad_face_eval(model, f, 1, uv, NULL, du, dv));
-          o->tslot_uv[2 * s] = uv[0];
-          o->tslot_uv[2 * s + 1] = uv[1];
-          HOC_TRY(face_normal(o, f, uv, du, dv, o->tnormal + 3 * s));
-          /* a small move cannot turn the surface over: where the CAD normal
-           * flips (a folded parametrisation at the boundary, see
-           * hoc_mesh_slot_normals) the slot keeps its orientation */
-          const double *old = o->normal + 3 * s;
-          double *nw = o->tnormal + 3 * s;
-          if (nw[0] * old[0] + nw[1] * old[1] + nw[2] * old[2] < 0)
-            for (int d = 0; d < 3; ++d) nw[d] = -nw[d];
-        }
-      }
+  int ent = m->entity[i];
+  if (m->dim[i] == HOC_ON_FACE) {
+    HOC_TRY(hoc_cad_face_eval(model, ent, 1, o->tpar + 2 * i, o->txyz + 3 * i, o->tdz + 6 * i,
+                              o->tdz + 6 * i + 3));
+    size_t s = o->ns_slot[o->ns_start[i]];
+    o->tslot_uv[2 * s] = o->tpar[2 * i];
+    o->tslot_uv[2 * s + 1] = o->tpar[2 * i + 1];
+    HOC_TRY(face_normal(o, ent, o->tpar + 2 * i, o->tdz + 6 * i, o->tdz + 6 * i + 3,
+                        o->tnormal + 3 * s));
+  } else {
+    HOC_TRY(hoc_cad_curve_eval(model, ent, 1, o->tpar + 2 * i, o->txyz + 3 * i, o->tdz + 6 * i));
+    o->tdz[6 * i + 3] = o->tdz[6 * i + 4] = o->tdz[6 * i + 5] = 0;
+    for (size_t j = o->ns_start[i]; j < o->ns_start[i + 1]; ++j) {
+      size_t s = o->ns_slot[j];
+      int f = m->slot_face[s];
+      double uv[2], du[3], dv[3];
+      HOC_TRY(hoc_cad_curve_to_face(model, ent, f, 1, o->tpar + 2 * i, uv));
+      hoc_cad_face_unwrap_near(&model->faces[f], m->slot_uv + 2 * s, uv);
+      HOC_TRY(hoc_cad_face_eval(model, f, 1, uv, NULL, du, dv));
+      o->tslot_uv[2 * s] = uv[0];
+      o->tslot_uv[2 * s + 1] = uv[1];
+      HOC_TRY(face_normal(o, f, uv, du, dv, o->tnormal + 3 * s));
+      /* a small move cannot turn the surface over: where the CAD normal
+       * flips (a folded parametrisation at the boundary, see
+       * hoc_mesh_slot_normals) the slot keeps its orientation */
+      const double *old = o->normal + 3 * s;
+      double *nw = o->tnormal + 3 * s;
+      if (nw[0] * old[0] + nw[1] * old[1] + nw[2] * old[2] < 0)
+        for (int d = 0; d < 3; ++d) nw[d] = -nw[d];
     }
-    a = b;
   }
   return HOC_OK;
+}
+
+/* CAD evaluation of the trial parameters of the nodes in list[0..n) (no
+ * node twice), on nthreads threads. */
+static hoc_status eval_trials(opt *o, const size_t *list, size_t n, int nthreads) {
+  hoc_par_error err = {0};
+#pragma omp parallel for schedule(dynamic, 16) num_threads(nthreads) if (n > 64)
+  for (size_t c = 0; c < n; ++c) hoc_par_error_catch(&err, eval_trial(o, list[c]));
+  return hoc_par_error_raise(&err);
 }
 
 /* Accept node k's trial. */
@@ -1154,16 +1189,51 @@ static int block_active(const opt *o, size_t b) {
   return 0;
 }
 
+/* Node k is active again: its blocks of both families go on their colours'
+ * queues. */
+static void wake_node(opt *o, size_t k) {
+  o->active[k] = 1;
+  for (int f = 0; f < 2; ++f) {
+    blockset *B = &o->fam[f];
+    size_t b = B->node_block[k];
+    if (b == SIZE_MAX || B->queued[b]) continue;
+    B->queued[b] = 1;
+    int c = B->block_color[b];
+    B->queue_next[b] = B->queue_head[c];
+    B->queue_head[c] = b;
+  }
+}
+
+/* Every block may be active (after a change of every node's flag). */
+static void wake_all(opt *o) {
+  for (int f = 0; f < 2; ++f) memset(o->fam[f].scan_all, 1, (size_t)o->fam[f].n_colors);
+}
+
+/* The blocks of a colour with an active node into o->list (in an order that
+ * does not matter: blocks of one colour share no element); returns their
+ * number. Empties the colour's queue. */
+static size_t select_active(opt *o, int color) {
+  blockset *B = o->B;
+  size_t n = 0;
+  for (size_t b = B->queue_head[color], next; b != SIZE_MAX; b = next) {
+    next = B->queue_next[b];
+    B->queued[b] = 0;
+    if (!B->scan_all[color] && block_active(o, b)) o->list[n++] = b;
+  }
+  B->queue_head[color] = SIZE_MAX;
+  if (B->scan_all[color]) {
+    B->scan_all[color] = 0;
+    for (size_t a = B->color_start[color]; a < B->color_start[color + 1]; ++a)
+      if (block_active(o, B->color_block[a])) o->list[n++] = B->color_block[a];
+  }
+  return n;
+}
+
 /* One colour: a Gauss-Newton step per active block, then a common
  * backtracking line search. *moved counts the nodes moved. */
 static hoc_status do_color(opt *o, int color, scratch *scr, int nthreads, size_t *moved) {
   hoc_mesh *m = o->m;
-  size_t first = o->B->color_start[color], last = o->B->color_start[color + 1];
-  size_t n = 0;
-  for (size_t a = first; a < last; ++a) {
-    size_t b = o->B->color_block[a];
-    if (block_active(o, b)) o->list[n++] = b;
-  }
+  size_t n = select_active(o, color);
   *moved = 0;
   if (!n) return HOC_OK;
   size_t *list = o->list;
@@ -1205,7 +1275,7 @@ static hoc_status do_color(opt *o, int color, scratch *scr, int nthreads, size_t
     size_t b = list[a];
     n_eval += o->B->bn_start[b + 1] - o->B->bn_start[b] + o->B->carry_start[b + 1] - o->B->carry_start[b];
   }
-  size_t *elist = hoc_calloc(n_eval + 1, sizeof *elist);
+  size_t *elist = hoc_calloc(n_eval + 1, sizeof *elist), n_committed = 0;
   HOC_CHECK(elist, HOC_ERR_MEMORY, "out of memory");
   hoc_status status = HOC_OK;
   for (int attempt = 0; attempt < 12 && nt; ++attempt) {
@@ -1216,7 +1286,7 @@ static hoc_status do_color(opt *o, int color, scratch *scr, int nthreads, size_t
       for (size_t c = o->B->bn_start[b]; c < o->B->bn_start[b + 1]; ++c) elist[ne_list++] = o->B->bn_node[c];
       for (size_t j = o->B->carry_start[b]; j < o->B->carry_start[b + 1]; ++j) elist[ne_list++] = o->B->carry_node[j];
     }
-    HOC_TRY_GOTO(eval_trials(o, elist, ne_list), done);
+    HOC_TRY_GOTO(eval_trials(o, elist, ne_list, nthreads), done);
 #pragma omp parallel for schedule(dynamic, 8) num_threads(nthreads)
     for (size_t a = 0; a < nt; ++a) {
       size_t b = list[a];
@@ -1240,6 +1310,7 @@ static hoc_status do_color(opt *o, int color, scratch *scr, int nthreads, size_t
         continue;
       }
       o->state[b] = 0;
+      o->committed[n_committed++] = b;
       size_t nodes = o->B->bn_start[b + 1] - o->B->bn_start[b];
       *moved += nodes;
       /* only a significant move wakes the neighbourhood (small ones would
@@ -1249,16 +1320,16 @@ static hoc_status do_color(opt *o, int color, scratch *scr, int nthreads, size_t
       /* wake every node of the elements it touches (itself included) */
       for (size_t c = o->B->be_start[b]; c < o->B->be_start[b + 1]; ++c) {
         const size_t *cn = m->conn + o->B->be_elem[c] * (size_t)o->np;
-        for (int i = 0; i < o->np; ++i) o->active[cn[i]] = 1;
+        for (int i = 0; i < o->np; ++i) wake_node(o, cn[i]);
       }
     }
     nt = keep;
   }
   for (size_t a = 0; a < nt; ++a) o->state[list[a]] = 0; /* gave up: asleep */
-  /* validity may have been gained */
+  /* validity may have been gained where blocks moved */
 #pragma omp parallel for schedule(dynamic, 8) num_threads(nthreads)
-  for (size_t a = first; a < last; ++a) {
-    size_t b = o->B->color_block[a];
+  for (size_t a = 0; a < n_committed; ++a) {
+    size_t b = o->committed[a];
     scratch *s = &scr[omp_get_thread_num()];
     for (size_t c = o->B->be_start[b]; c < o->B->be_start[b + 1]; ++c) {
       size_t e = o->B->be_elem[c];
@@ -1348,6 +1419,7 @@ hoc_status hoc_mesh_optimize(hoc_mesh *mesh, const hoc_optimize_options *options
     ctx.active[i] = ctx.ndof[i] > 0;
     res.free_nodes += ctx.ndof[i] > 0;
   }
+  wake_all(&ctx);
   double f, qmin;
   size_t tangled;
   HOC_TRY_GOTO(sweep_start(&ctx, &f, &qmin, &tangled), done);
@@ -1366,7 +1438,7 @@ hoc_status hoc_mesh_optimize(hoc_mesh *mesh, const hoc_optimize_options *options
       if (ctx.region[e] || ctx.qe[e] < 0.5 * qmean)
         for (int i = 0; i < ctx.np; ++i) {
           size_t node = mesh->conn[e * (size_t)ctx.np + (size_t)i];
-          if (ctx.ndof[node]) ctx.active[node] = 1;
+          if (ctx.ndof[node]) wake_node(&ctx, node);
         }
     /* a step worth less than a small share of the average node's part of f
      * puts its block to sleep */
@@ -1376,11 +1448,12 @@ hoc_status hoc_mesh_optimize(hoc_mesh *mesh, const hoc_optimize_options *options
     ctx.wake_factor = tangled ? 1 : 10;
     if (it == 1) {
       HOC_TRY_GOTO(screen(&ctx), done);
+      wake_all(&ctx);
       for (size_t e = 0; e < mesh->n_elems; ++e)
         if (ctx.qe[e] < 0.5 * qmean)
           for (int i = 0; i < ctx.np; ++i) {
             size_t node = mesh->conn[e * (size_t)ctx.np + (size_t)i];
-            if (ctx.ndof[node]) ctx.active[node] = 1;
+            if (ctx.ndof[node]) wake_node(&ctx, node);
           }
     }
     /* the natural blocks, then every node on its own */
@@ -1464,7 +1537,7 @@ static hoc_status block_f_at(opt *o, size_t b, int dof, double h, scratch *s, do
   HOC_CHECK(list, HOC_ERR_MEMORY, "out of memory");
   for (size_t c = o->B->bn_start[b]; c < o->B->bn_start[b + 1]; ++c) list[n++] = o->B->bn_node[c];
   for (size_t j = o->B->carry_start[b]; j < o->B->carry_start[b + 1]; ++j) list[n++] = o->B->carry_node[j];
-  hoc_status st2 = eval_trials(o, list, n);
+  hoc_status st2 = eval_trials(o, list, n, 1);
   free(list);
   HOC_TRY(st2);
   set_moving(o, b, 1);
