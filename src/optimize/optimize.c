@@ -944,6 +944,7 @@ static hoc_status screen(opt *o) {
     free(contrib);
     return HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
   }
+#pragma omp parallel for schedule(static)
   for (size_t k = 0; k < m->n_nodes; ++k) {
     if (!o->ndof[k]) continue;
     double c[5] = {0, 0, 0, 0, 0};

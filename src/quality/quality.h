@@ -37,7 +37,17 @@ typedef struct hoc_quality_tables {
   int nv;     /* validation points: the equispaced lattice of order 2p */
   double *Nv; /* [nv][np] basis values there (for the interpolated normal) */
   double *Gv; /* [nv][np][2] ideal-space gradients there */
+  /* All nq + np + nv points again, for measuring: in blocks of HOC_QB
+   * points (the last padded with copies of the last point), per block and
+   * node the HOC_QB values side by side, so that the kernel works on HOC_QB
+   * points at once. Normals at node points interpolate with the identity. */
+  int n_blocks;
+  double *Bx, *By; /* [n_blocks][np][HOC_QB] ideal-space gradients */
+  double *Bn;      /* [n_blocks][np][HOC_QB] basis values (normal interpolation) */
+  double *Bw;      /* [n_blocks][HOC_QB] weights: w at quadrature points, else 0 */
 } hoc_quality_tables;
+
+enum { HOC_QB = 4 };
 
 /** Quadrature degree used for order p (see docs/quality.md for why). */
 int hoc_quality_degree(int p);
@@ -81,6 +91,11 @@ double hoc_distortion_point(hoc_measure measure, const double a1[3], const doubl
  *  @return q = 1/eta, 0 if tangled */
 double hoc_element_quality(const hoc_quality_tables *t, hoc_measure measure, const double *x,
                            const double *n, double *eta, double *min_sigma);
+
+/** Vector width of hoc_element_quality: 0 the widest the CPU runs (the
+ *  default), 2 (SSE2) or 4 (AVX2, where the CPU has it). For tests; not
+ *  to be changed while other threads measure. Returns the width in use. */
+int hoc_quality_set_width(int width);
 
 /** Residuals of the least-squares objective of one element,
  *  r_q = sqrt(w_q) (eta(x~_q) - 1), and their derivatives.

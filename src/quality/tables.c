@@ -27,6 +27,10 @@ static void tables_free(hoc_quality_tables *t) {
   free(t->rs);
   free(t->Nv);
   free(t->Gv);
+  free(t->Bx);
+  free(t->By);
+  free(t->Bn);
+  free(t->Bw);
   free(t);
 }
 
@@ -92,6 +96,38 @@ static hoc_status build(int p, hoc_nodeset set, int degree, hoc_quality_tables *
     free(pts);
     free(dv);
     if (status != HOC_OK) goto fail;
+  }
+  {
+    /* the blocked copy: quadrature points, nodes, lattice */
+    int total = t->nq + t->np + t->nv;
+    t->n_blocks = (total + HOC_QB - 1) / HOC_QB;
+    size_t nb = (size_t)t->n_blocks;
+    HOC_ALLOC_GOTO(t->Bx, nb * np * HOC_QB, fail);
+    HOC_ALLOC_GOTO(t->By, nb * np * HOC_QB, fail);
+    HOC_ALLOC_GOTO(t->Bn, nb * np * HOC_QB, fail);
+    HOC_ALLOC_GOTO(t->Bw, nb * HOC_QB, fail);
+    for (int k = 0; k < t->n_blocks * HOC_QB; ++k) {
+      int j = k < total ? k : total - 1;
+      size_t b = (size_t)k / HOC_QB, l = (size_t)k % HOC_QB;
+      for (size_t i = 0; i < np; ++i) {
+        const double *g;
+        double nv;
+        if (j < t->nq) {
+          g = t->G + 2 * ((size_t)j * np + i);
+          nv = t->N[(size_t)j * np + i];
+        } else if (j < t->nq + t->np) {
+          g = t->Gn + 2 * ((size_t)(j - t->nq) * np + i);
+          nv = (size_t)(j - t->nq) == i ? 1.0 : 0.0;
+        } else {
+          g = t->Gv + 2 * ((size_t)(j - t->nq - t->np) * np + i);
+          nv = t->Nv[(size_t)(j - t->nq - t->np) * np + i];
+        }
+        t->Bx[(b * np + i) * HOC_QB + l] = g[0];
+        t->By[(b * np + i) * HOC_QB + l] = g[1];
+        t->Bn[(b * np + i) * HOC_QB + l] = nv;
+      }
+      t->Bw[k] = k < t->nq ? t->w[k] : 0.0;
+    }
   }
   hoc_lagrange_destroy(&basis);
   hoc_quadrature_free(&quad);

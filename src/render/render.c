@@ -519,7 +519,7 @@ static void raster_triangle(workspace *ws, const tri_style *st, const double *v0
    * sub-triangle needs them only if a vertex is near the boundary (the
    * distances are affine, so their minimum is at a vertex) */
   const double half = st->edge_half;
-  plane dist[3];
+  plane dist[3] = {{0}}; /* (set for the edges in near_edge, read only for those) */
   int near_edge = 0;
   if (st->edge_alpha > 0) {
     plane r = plane_fit(v0, v1, v2, r0[0], r1[0], r2[0], inv);

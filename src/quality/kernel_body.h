@@ -1,0 +1,56 @@
+/* Body of the measuring kernel for one vector width, included by
+ * distortion.c once per width (a template in C): KW lanes of type KV (mask
+ * type KL), function KNAME with attributes KATTR. It adds, for every point
+ * of the element, w eta^2 to sum[], the smallest sigma / |D phi|^2 to
+ * smin[] and 1 to bad[] where sigma <= 0 (or NaN), lane by lane (HOC_QB
+ * lanes; blocks of HOC_QB points are taken KW at a time).
+ * SPDX-License-Identifier: GPL-2.0-or-later */
+KATTR static void KNAME(const hoc_quality_tables *t, int oddy, const double *x, const double *n,
+                        double *sum_out, double *smin_out, double *bad_out) {
+  const int np = t->np;
+  for (int h = 0; h < HOC_QB; h += KW) {
+    KV sum = KSPLAT(0), smin = KSPLAT(INFINITY), bad = KSPLAT(0);
+    for (int b = 0; b < t->n_blocks; ++b) {
+      size_t off = (size_t)b * (size_t)np * HOC_QB + (size_t)h;
+      const double *bx = t->Bx + off, *by = t->By + off, *bn = t->Bn + off;
+      KV a10 = KSPLAT(0), a11 = a10, a12 = a10, a20 = a10, a21 = a10, a22 = a10;
+      KV n0 = a10, n1 = a10, n2 = a10;
+      for (int i = 0; i < np; ++i) {
+        KV gx = KLOAD(bx + i * HOC_QB), gy = KLOAD(by + i * HOC_QB), gn = KLOAD(bn + i * HOC_QB);
+        KV x0 = KSPLAT(x[3 * i]), x1 = KSPLAT(x[3 * i + 1]), x2 = KSPLAT(x[3 * i + 2]);
+        a10 += gx * x0;
+        a11 += gx * x1;
+        a12 += gx * x2;
+        a20 += gy * x0;
+        a21 += gy * x1;
+        a22 += gy * x2;
+        n0 += gn * KSPLAT(n[3 * i]);
+        n1 += gn * KSPLAT(n[3 * i + 1]);
+        n2 += gn * KSPLAT(n[3 * i + 2]);
+      }
+      KV c0 = a11 * a22 - a12 * a21, c1 = a12 * a20 - a10 * a22, c2 = a10 * a21 - a11 * a20;
+      KV cc = c0 * c0 + c1 * c1 + c2 * c2;
+      double l2[KW], cl[KW];
+      memcpy(l2, &cc, sizeof l2);
+      for (int l = 0; l < KW; ++l) cl[l] = sqrt(l2[l]);
+      KV pos = KMASK01(c0 * n0 + c1 * n1 + c2 * n2 > KSPLAT(0));
+      KV sig = KLOAD(cl) * (2 * pos - 1);
+      KV g11 = a10 * a10 + a11 * a11 + a12 * a12, g22 = a20 * a20 + a21 * a21 + a22 * a22;
+      KV F = g11 + g22, rel = sig / F;
+      bad += 1 - KMASK01(rel > KSPLAT(0));
+      KL lower = rel < smin;
+      smin = (KV)(((KL)rel & lower) | ((KL)smin & ~lower));
+      KV e;
+      if (oddy) {
+        KV g12 = a10 * a20 + a11 * a21 + a12 * a22;
+        e = KSPLAT(1.5) * (g11 * g11 + 2 * g12 * g12 + g22 * g22 - F * F / 3) / (sig * sig);
+      } else {
+        e = F / (2 * sig);
+      }
+      sum += KLOAD(t->Bw + (size_t)b * HOC_QB + (size_t)h) * e * e;
+    }
+    memcpy(sum_out + h, &sum, sizeof sum);
+    memcpy(smin_out + h, &smin, sizeof smin);
+    memcpy(bad_out + h, &bad, sizeof bad);
+  }
+}
