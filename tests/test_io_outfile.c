@@ -245,7 +245,36 @@ static void test_signal(void) {
   hoc_outfile_abort(&out);
 }
 
+/* Remove a directory tree this test made (files and directories only). */
+static void remove_tree(const char *dir) {
+  DIR *d = opendir(dir);
+  if (d) {
+    struct dirent *e;
+    while ((e = readdir(d))) {
+      if (!strcmp(e->d_name, ".") || !strcmp(e->d_name, "..")) continue;
+      char path[4096];
+      snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
+      struct stat st;
+      if (lstat(path, &st) == 0 && S_ISDIR(st.st_mode)) {
+        chmod(path, 0755);
+        remove_tree(path);
+      } else {
+        unlink(path);
+      }
+    }
+    closedir(d);
+  }
+  rmdir(dir);
+}
+
 int main(void) {
+  /* a directory of its own: tests running alongside make temporary files
+   * in the shared working directory, which the counts below would see */
+  char own[] = "outfile-test-XXXXXX", cwd[4096];
+  if (!mkdtemp(own) || !getcwd(cwd, sizeof cwd) || chdir(own) != 0) {
+    fprintf(stderr, "cannot make a working directory\n");
+    return 1;
+  }
   mkdir("outdir", 0755);
   mkdir("sigdir", 0755);
   test_commit_and_abort();
@@ -253,5 +282,7 @@ int main(void) {
   test_bad_targets();
   test_links_and_modes();
   test_signal();
-  return test_report();
+  int rc = test_report();
+  if (chdir(cwd) == 0) remove_tree(own);
+  return rc;
 }

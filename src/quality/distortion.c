@@ -86,27 +86,6 @@ double hoc_distortion_point(hoc_measure measure, const double a1[3], const doubl
   return eta;
 }
 
-/* Columns of D phi and the interpolated normal at one point from the node
- * data: g[np][2] gradients, nv[np] basis values (NULL: the normal of node
- * `node`). */
-static inline void jacobian_at(int np, const double *x, const double *g, double *a1,
-                               double *a2) {
-  a1[0] = a1[1] = a1[2] = a2[0] = a2[1] = a2[2] = 0;
-  for (int i = 0; i < np; ++i) {
-    double gx = g[2 * i], gy = g[2 * i + 1];
-    const double *xi = x + 3 * i;
-    a1[0] += gx * xi[0], a1[1] += gx * xi[1], a1[2] += gx * xi[2];
-    a2[0] += gy * xi[0], a2[1] += gy * xi[1], a2[2] += gy * xi[2];
-  }
-}
-
-static inline void normal_at(int np, const double *n, const double *N, double *nq) {
-  nq[0] = nq[1] = nq[2] = 0;
-  for (int i = 0; i < np; ++i) {
-    nq[0] += N[i] * n[3 * i], nq[1] += N[i] * n[3 * i + 1], nq[2] += N[i] * n[3 * i + 2];
-  }
-}
-
 /* Measuring: every point of the element (quadrature, nodes, lattice) in
  * vectors of 2 doubles (SSE2, any x86-64) or 4 (AVX2, picked at run time),
  * with GCC/clang vector extensions. The same operations in the same order
@@ -125,6 +104,7 @@ typedef double v4d_u __attribute__((vector_size(4 * sizeof(double)), aligned(8),
 #define KV v2d
 #define KL v2l
 #define KNAME quality_points_2
+#define KFRAMES frames_2
 #define KATTR
 #define KLOAD(p) (*(const v2d_u *)(const void *)(p))
 #define KSPLAT(x) ((v2d){(x), (x)})
@@ -134,6 +114,7 @@ typedef double v4d_u __attribute__((vector_size(4 * sizeof(double)), aligned(8),
 #undef KV
 #undef KL
 #undef KNAME
+#undef KFRAMES
 #undef KATTR
 #undef KLOAD
 #undef KSPLAT
@@ -145,6 +126,7 @@ typedef double v4d_u __attribute__((vector_size(4 * sizeof(double)), aligned(8),
 #define KV v4d
 #define KL v4l
 #define KNAME quality_points_4
+#define KFRAMES frames_4
 #define KATTR __attribute__((target("avx2")))
 #define KLOAD(p) (*(const v4d_u *)(const void *)(p))
 #define KSPLAT(x) ((v4d){(x), (x), (x), (x)})
@@ -165,6 +147,56 @@ static int avx2_available(void) {
 int hoc_quality_set_width(int width) {
   forced_width = width == 2 || (width == 4 && avx2_available()) ? width : 0;
   return forced_width ? forced_width : avx2_available() ? 4 : 2;
+}
+
+/* Frames (a1, a2, n) at the points of blocks b0..b1-1 (see KFRAMES). */
+static void frames(const hoc_quality_tables *t, int b0, int b1, const double *x, const double *n,
+                   double *out) {
+#ifdef HOC_HAVE_AVX2_KERNEL
+  if (forced_width != 2 && __builtin_cpu_supports("avx2"))
+    frames_4(t, b0, b1, x, n, out);
+  else
+#endif
+    frames_2(t, b0, b1, x, n, out);
+}
+
+/* Walks the points first..last-1 of the blocked layout (quadrature points,
+ * then nodes, then the lattice) with their frames, computed FRAME_BLOCKS
+ * blocks at a time in vector code. */
+enum { FRAME_BLOCKS = 16, FRAME_POINTS = FRAME_BLOCKS * HOC_QB };
+
+typedef struct point_walk {
+  const hoc_quality_tables *t;
+  const double *x, *n;
+  int k, last, b0, b1;
+  double fr[9 * FRAME_POINTS];
+} point_walk;
+
+static void walk_begin(point_walk *w, const hoc_quality_tables *t, const double *x,
+                       const double *n, int first, int last) {
+  w->t = t;
+  w->x = x;
+  w->n = n;
+  w->k = first;
+  w->last = last;
+  w->b0 = w->b1 = 0;
+}
+
+/* The next point's index (-1 at the end) and its a1, a2, normal. */
+static int walk_next(point_walk *w, double *a1, double *a2, double *nq) {
+  if (w->k >= w->last) return -1;
+  if (w->k >= w->b1 * HOC_QB || w->k < w->b0 * HOC_QB) {
+    w->b0 = w->k / HOC_QB;
+    w->b1 = w->b0 + FRAME_BLOCKS < w->t->n_blocks ? w->b0 + FRAME_BLOCKS : w->t->n_blocks;
+    frames(w->t, w->b0, w->b1, w->x, w->n, w->fr);
+  }
+  size_t st = (size_t)(w->b1 - w->b0) * HOC_QB, j = (size_t)(w->k - w->b0 * HOC_QB);
+  for (int c = 0; c < 3; ++c) {
+    a1[c] = w->fr[(size_t)c * st + j];
+    a2[c] = w->fr[(size_t)(3 + c) * st + j];
+    nq[c] = w->fr[(size_t)(6 + c) * st + j];
+  }
+  return w->k++;
 }
 
 double hoc_element_quality(const hoc_quality_tables *t, hoc_measure measure, const double *x,
@@ -193,12 +225,12 @@ double hoc_element_quality(const hoc_quality_tables *t, hoc_measure measure, con
 double hoc_element_residuals(const hoc_quality_tables *t, hoc_measure measure, const double *x,
                              const double *n, double delta, double *r, double *J) {
   int np = t->np;
-  double smin = INFINITY;
-  for (int q = 0; q < t->nq; ++q) {
-    double a1[3], a2[3], nq[3], sig, g1[3], g2[3];
+  double smin = INFINITY, a1[3], a2[3], nq[3];
+  point_walk w;
+  walk_begin(&w, t, x, n, 0, t->nq);
+  for (int q; (q = walk_next(&w, a1, a2, nq)) >= 0;) {
+    double sig, g1[3], g2[3];
     const double *G = t->G + 2 * (size_t)q * np;
-    jacobian_at(np, x, G, a1, a2);
-    normal_at(np, n, t->N + (size_t)q * np, nq);
     double e = hoc_distortion_point(measure, a1, a2, nq, delta, &sig, J ? g1 : NULL,
                                     J ? g2 : NULL);
     double rel = sig / (dot(a1, a1) + dot(a2, a2));
@@ -218,12 +250,12 @@ double hoc_element_residuals_node(const hoc_quality_tables *t, hoc_measure measu
                                   const double *x, const double *n, double delta, int node,
                                   double *r, double *Jk) {
   int np = t->np;
-  double smin = INFINITY;
-  for (int q = 0; q < t->nq; ++q) {
-    double a1[3], a2[3], nq[3], sig, g1[3], g2[3];
+  double smin = INFINITY, a1[3], a2[3], nq[3];
+  point_walk w;
+  walk_begin(&w, t, x, n, 0, t->nq);
+  for (int q; (q = walk_next(&w, a1, a2, nq)) >= 0;) {
+    double sig, g1[3], g2[3];
     const double *G = t->G + 2 * (size_t)q * np;
-    jacobian_at(np, x, G, a1, a2);
-    normal_at(np, n, t->N + (size_t)q * np, nq);
     double e = hoc_distortion_point(measure, a1, a2, nq, delta, &sig, g1, g2);
     double rel = sig / (dot(a1, a1) + dot(a2, a2));
     if (!(rel >= smin)) smin = rel;
@@ -239,13 +271,13 @@ double hoc_element_node_residuals(const hoc_quality_tables *t, hoc_measure measu
                                   const double *x, const double *n, double delta, double *r,
                                   double *J) {
   int np = t->np, nv = t->nv;
-  double smin = INFINITY, sw = sqrt(1.0 / (np + nv));
-  for (int j = 0; j < np + nv; ++j) {
-    double a1[3], a2[3], sig, g1[3], g2[3], nj[3];
+  double smin = INFINITY, sw = sqrt(1.0 / (np + nv)), a1[3], a2[3], nj[3];
+  point_walk w;
+  walk_begin(&w, t, x, n, t->nq, t->nq + np + nv);
+  for (int k; (k = walk_next(&w, a1, a2, nj)) >= 0;) {
+    int j = k - t->nq;
+    double sig, g1[3], g2[3];
     const double *G = j < np ? t->Gn + 2 * (size_t)j * np : t->Gv + 2 * (size_t)(j - np) * np;
-    jacobian_at(np, x, G, a1, a2);
-    if (j < np) memcpy(nj, n + 3 * j, sizeof nj);
-    else normal_at(np, n, t->Nv + (size_t)(j - np) * np, nj);
     double e = hoc_distortion_point(measure, a1, a2, nj, delta, &sig, J ? g1 : NULL,
                                     J ? g2 : NULL);
     double rel = sig / (dot(a1, a1) + dot(a2, a2));
@@ -254,38 +286,29 @@ double hoc_element_node_residuals(const hoc_quality_tables *t, hoc_measure measu
     if (J) {
       double *Jj = J + 3 * (size_t)j * np;
       for (int i = 0; i < np; ++i)
-        for (int k = 0; k < 3; ++k) Jj[3 * i + k] = sw * (g1[k] * G[2 * i] + g2[k] * G[2 * i + 1]);
+        for (int c = 0; c < 3; ++c) Jj[3 * i + c] = sw * (g1[c] * G[2 * i] + g2[c] * G[2 * i + 1]);
     }
   }
   return smin;
 }
 
-int hoc_element_tangled(const hoc_quality_tables *t, const double *x, const double *n) {
-  int np = t->np;
-  for (int q = 0; q < t->nq; ++q) {
-    double a1[3], a2[3], nq[3], c[3];
-    jacobian_at(np, x, t->G + 2 * (size_t)q * np, a1, a2);
-    normal_at(np, n, t->N + (size_t)q * np, nq);
+/* 1 if sigma <= 0 at one of the points first..last-1. */
+static int points_tangled(const hoc_quality_tables *t, const double *x, const double *n,
+                          int first, int last) {
+  double a1[3], a2[3], nq[3], c[3];
+  point_walk w;
+  walk_begin(&w, t, x, n, first, last);
+  while (walk_next(&w, a1, a2, nq) >= 0) {
     cross(a1, a2, c);
     if (!(dot(c, nq) > 0) || !(dot(c, c) > 0)) return 1;
   }
-  return hoc_element_nodes_tangled(t, x, n);
+  return 0;
+}
+
+int hoc_element_tangled(const hoc_quality_tables *t, const double *x, const double *n) {
+  return points_tangled(t, x, n, 0, t->nq + t->np + t->nv);
 }
 
 int hoc_element_nodes_tangled(const hoc_quality_tables *t, const double *x, const double *n) {
-  int np = t->np;
-  for (int j = 0; j < np; ++j) {
-    double a1[3], a2[3], c[3];
-    jacobian_at(np, x, t->Gn + 2 * (size_t)j * np, a1, a2);
-    cross(a1, a2, c);
-    if (!(dot(c, n + 3 * j) > 0) || !(dot(c, c) > 0)) return 1;
-  }
-  for (int j = 0; j < t->nv; ++j) {
-    double a1[3], a2[3], c[3], nv[3];
-    jacobian_at(np, x, t->Gv + 2 * (size_t)j * np, a1, a2);
-    normal_at(np, n, t->Nv + (size_t)j * np, nv);
-    cross(a1, a2, c);
-    if (!(dot(c, nv) > 0) || !(dot(c, c) > 0)) return 1;
-  }
-  return 0;
+  return points_tangled(t, x, n, t->nq, t->nq + t->np + t->nv);
 }

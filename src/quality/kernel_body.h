@@ -54,3 +54,42 @@ KATTR static void KNAME(const hoc_quality_tables *t, int oddy, const double *x, 
     memcpy(bad_out + h, &bad, sizeof bad);
   }
 }
+
+/* The columns of D phi and the interpolated normal at the points of blocks
+ * b0..b1-1: out[c][k] for c = a1 (0..2), a2 (3..5), n (6..8) and k the point
+ * counted from block b0, with stride = (b1 - b0) HOC_QB. */
+KATTR static void KFRAMES(const hoc_quality_tables *t, int b0, int b1, const double *x,
+                          const double *n, double *out) {
+  const int np = t->np;
+  const size_t stride = (size_t)(b1 - b0) * HOC_QB;
+  for (int b = b0; b < b1; ++b)
+    for (int h = 0; h < HOC_QB; h += KW) {
+      size_t off = (size_t)b * (size_t)np * HOC_QB + (size_t)h;
+      const double *bx = t->Bx + off, *by = t->By + off, *bn = t->Bn + off;
+      KV a10 = KSPLAT(0), a11 = a10, a12 = a10, a20 = a10, a21 = a10, a22 = a10;
+      KV n0 = a10, n1 = a10, n2 = a10;
+      for (int i = 0; i < np; ++i) {
+        KV gx = KLOAD(bx + i * HOC_QB), gy = KLOAD(by + i * HOC_QB), gn = KLOAD(bn + i * HOC_QB);
+        KV x0 = KSPLAT(x[3 * i]), x1 = KSPLAT(x[3 * i + 1]), x2 = KSPLAT(x[3 * i + 2]);
+        a10 += gx * x0;
+        a11 += gx * x1;
+        a12 += gx * x2;
+        a20 += gy * x0;
+        a21 += gy * x1;
+        a22 += gy * x2;
+        n0 += gn * KSPLAT(n[3 * i]);
+        n1 += gn * KSPLAT(n[3 * i + 1]);
+        n2 += gn * KSPLAT(n[3 * i + 2]);
+      }
+      size_t k = (size_t)(b - b0) * HOC_QB + (size_t)h;
+      memcpy(out + 0 * stride + k, &a10, sizeof a10);
+      memcpy(out + 1 * stride + k, &a11, sizeof a11);
+      memcpy(out + 2 * stride + k, &a12, sizeof a12);
+      memcpy(out + 3 * stride + k, &a20, sizeof a20);
+      memcpy(out + 4 * stride + k, &a21, sizeof a21);
+      memcpy(out + 5 * stride + k, &a22, sizeof a22);
+      memcpy(out + 6 * stride + k, &n0, sizeof n0);
+      memcpy(out + 7 * stride + k, &n1, sizeof n1);
+      memcpy(out + 8 * stride + k, &n2, sizeof n2);
+    }
+}
