@@ -5,6 +5,28 @@
  * smin[] and 1 to bad[] where sigma <= 0 (or NaN), lane by lane (HOC_QB
  * lanes; blocks of HOC_QB points are taken KW at a time).
  * SPDX-License-Identifier: GPL-2.0-or-later */
+/* Declares a10..a22 (the columns of D phi) and n0..n2 (the interpolated
+ * normal) at KW points from the tables' columns bx, by, bn (node i at
+ * i HOC_QB) and the element's x, n. */
+#ifndef KFRAME_SUMS
+#define KFRAME_SUMS(bx, by, bn)                                                                   \
+  KV a10 = KSPLAT(0), a11 = a10, a12 = a10, a20 = a10, a21 = a10, a22 = a10;                      \
+  KV n0 = a10, n1 = a10, n2 = a10;                                                                \
+  for (int i = 0; i < np; ++i) {                                                                  \
+    KV gx = KLOAD((bx) + i * HOC_QB), gy = KLOAD((by) + i * HOC_QB), gn = KLOAD((bn) + i * HOC_QB); \
+    KV x0 = KSPLAT(x[3 * i]), x1 = KSPLAT(x[3 * i + 1]), x2 = KSPLAT(x[3 * i + 2]);               \
+    a10 += gx * x0;                                                                               \
+    a11 += gx * x1;                                                                               \
+    a12 += gx * x2;                                                                               \
+    a20 += gy * x0;                                                                               \
+    a21 += gy * x1;                                                                               \
+    a22 += gy * x2;                                                                               \
+    n0 += gn * KSPLAT(n[3 * i]);                                                                  \
+    n1 += gn * KSPLAT(n[3 * i + 1]);                                                              \
+    n2 += gn * KSPLAT(n[3 * i + 2]);                                                              \
+  }
+#endif
+
 KATTR static void KNAME(const hoc_quality_tables *t, int oddy, const double *x, const double *n,
                         double *sum_out, double *smin_out, double *bad_out) {
   const int np = t->np;
@@ -13,21 +35,7 @@ KATTR static void KNAME(const hoc_quality_tables *t, int oddy, const double *x, 
     for (int b = 0; b < t->n_blocks; ++b) {
       size_t off = (size_t)b * (size_t)np * HOC_QB + (size_t)h;
       const double *bx = t->Bx + off, *by = t->By + off, *bn = t->Bn + off;
-      KV a10 = KSPLAT(0), a11 = a10, a12 = a10, a20 = a10, a21 = a10, a22 = a10;
-      KV n0 = a10, n1 = a10, n2 = a10;
-      for (int i = 0; i < np; ++i) {
-        KV gx = KLOAD(bx + i * HOC_QB), gy = KLOAD(by + i * HOC_QB), gn = KLOAD(bn + i * HOC_QB);
-        KV x0 = KSPLAT(x[3 * i]), x1 = KSPLAT(x[3 * i + 1]), x2 = KSPLAT(x[3 * i + 2]);
-        a10 += gx * x0;
-        a11 += gx * x1;
-        a12 += gx * x2;
-        a20 += gy * x0;
-        a21 += gy * x1;
-        a22 += gy * x2;
-        n0 += gn * KSPLAT(n[3 * i]);
-        n1 += gn * KSPLAT(n[3 * i + 1]);
-        n2 += gn * KSPLAT(n[3 * i + 2]);
-      }
+      KFRAME_SUMS(bx, by, bn);
       KV c0 = a11 * a22 - a12 * a21, c1 = a12 * a20 - a10 * a22, c2 = a10 * a21 - a11 * a20;
       KV cc = c0 * c0 + c1 * c1 + c2 * c2;
       double l2[KW], cl[KW];
@@ -66,21 +74,7 @@ KATTR static void KFRAMES(const hoc_quality_tables *t, int b0, int b1, const dou
     for (int h = 0; h < HOC_QB; h += KW) {
       size_t off = (size_t)b * (size_t)np * HOC_QB + (size_t)h;
       const double *bx = t->Bx + off, *by = t->By + off, *bn = t->Bn + off;
-      KV a10 = KSPLAT(0), a11 = a10, a12 = a10, a20 = a10, a21 = a10, a22 = a10;
-      KV n0 = a10, n1 = a10, n2 = a10;
-      for (int i = 0; i < np; ++i) {
-        KV gx = KLOAD(bx + i * HOC_QB), gy = KLOAD(by + i * HOC_QB), gn = KLOAD(bn + i * HOC_QB);
-        KV x0 = KSPLAT(x[3 * i]), x1 = KSPLAT(x[3 * i + 1]), x2 = KSPLAT(x[3 * i + 2]);
-        a10 += gx * x0;
-        a11 += gx * x1;
-        a12 += gx * x2;
-        a20 += gy * x0;
-        a21 += gy * x1;
-        a22 += gy * x2;
-        n0 += gn * KSPLAT(n[3 * i]);
-        n1 += gn * KSPLAT(n[3 * i + 1]);
-        n2 += gn * KSPLAT(n[3 * i + 2]);
-      }
+      KFRAME_SUMS(bx, by, bn);
       size_t k = (size_t)(b - b0) * HOC_QB + (size_t)h;
       memcpy(out + 0 * stride + k, &a10, sizeof a10);
       memcpy(out + 1 * stride + k, &a11, sizeof a11);
