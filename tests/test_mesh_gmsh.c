@@ -161,7 +161,8 @@ static void test_concurrent_eval(const char *name) {
     for (int i = 0; i < N; ++i)
       for (int d = 0; d < 2; ++d) {
         double r = rand() / (double)RAND_MAX;
-        par[2 * (N * (size_t)e + (size_t)i) + (size_t)d] = face || d == 0 ? lo[d] + r * (hi[d] - lo[d]) : 0;
+        par[2 * (N * (size_t)e + (size_t)i) + (size_t)d] =
+            face || d == 0 ? lo[d] + r * (hi[d] - lo[d]) : 0;
       }
   }
   CHECK(n_conc > 0 && n_conc < ne); /* both paths are exercised */
@@ -178,7 +179,8 @@ static void test_concurrent_eval(const char *name) {
       if (e < model->n_faces) {
         st = hoc_cad_face_eval(model, e, PIECE, p, x, a, b);
       } else {
-        for (int i = 0; i < PIECE; ++i) t[i] = p[2 * i];
+        for (int i = 0; i < PIECE; ++i)
+          t[i] = p[2 * i];
         st = hoc_cad_curve_eval(model, e - model->n_faces, PIECE, t, x, a);
         memset(b, 0, sizeof b);
       }

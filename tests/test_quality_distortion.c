@@ -299,7 +299,8 @@ static void test_widths_agree(void) {
         double nz[3] = {0.1 * (rnd() - 0.5), 0.1 * (rnd() - 0.5), trial % 7 == 3 ? -1 : 1};
         memcpy(n + 3 * i, nz, sizeof nz);
       }
-      if (trial % 5 == 4 && np > 3) memcpy(x + 3 * (np - 1), x, 3 * sizeof *x); /* a node on a vertex */
+      if (trial % 5 == 4 && np > 3)
+        memcpy(x + 3 * (np - 1), x, 3 * sizeof *x); /* a node on a vertex */
       for (int meas = 0; meas < 2; ++meas) {
         double e[2], s[2], q[2];
         for (int w = 0; w < 2; ++w) {

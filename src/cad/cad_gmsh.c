@@ -21,8 +21,8 @@
 #include <omp.h>
 
 #include <ctype.h>
-#include <pthread.h>
 #include <errno.h>
+#include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -43,10 +43,10 @@ static void serial_end(int needed) {
 
 /* Kinds OpenCASCADE evaluates without shared or cached state (gmsh's type names). */
 static int concurrent_kind(int dim, const char *type) {
-  static const char *const surfaces[] = {"Plane", "Cylinder", "Cone", "Sphere", "Torus",
-                                         "BSpline surface", "Bezier surface"};
-  static const char *const curves[] = {"Line", "Circle", "Ellipse", "Hyperbola", "Parabola",
-                                       "BSpline", "Bezier"};
+  static const char *const surfaces[] = {"Plane", "Cylinder",        "Cone",          "Sphere",
+                                         "Torus", "BSpline surface", "Bezier surface"};
+  static const char *const curves[] = {"Line",     "Circle",  "Ellipse", "Hyperbola",
+                                       "Parabola", "BSpline", "Bezier"};
   const char *const *list = dim == 2 ? surfaces : curves;
   size_t n = dim == 2 ? sizeof surfaces / sizeof *surfaces : sizeof curves / sizeof *curves;
   for (size_t i = 0; i < n; ++i)
@@ -149,8 +149,8 @@ void hoc_quiet_end(hoc_quiet *q, char *first_error, size_t size) {
 
 /* Backend operations ----------------------------------------------------- */
 
-static hoc_status gmsh_face_eval_raw(const hoc_cad_face *f, size_t n, const double *uv,
-                                     double *xyz, double *du, double *dv) {
+static hoc_status gmsh_face_eval_raw(const hoc_cad_face *f, size_t n, const double *uv, double *xyz,
+                                     double *du, double *dv) {
   int ierr = 0;
   if (xyz) {
     double *x = NULL;
@@ -242,8 +242,9 @@ static hoc_status gmsh_curve_eval(void *ctx, const hoc_cad_curve *c, size_t n, c
   return st;
 }
 
-static hoc_status gmsh_curve_to_face_unlocked(void *ctx, const hoc_cad_curve *c, const hoc_cad_face *f,
-                                     size_t n, const double *t, double *uv) {
+static hoc_status gmsh_curve_to_face_unlocked(void *ctx, const hoc_cad_curve *c,
+                                              const hoc_cad_face *f, size_t n, const double *t,
+                                              double *uv) {
   (void)ctx;
   if (!n) return HOC_OK;
   int ierr = 0;
@@ -259,8 +260,8 @@ static hoc_status gmsh_curve_to_face_unlocked(void *ctx, const hoc_cad_curve *c,
   return HOC_OK;
 }
 
-static hoc_status gmsh_vertex_to_face_unlocked(void *ctx, const hoc_cad_vertex *v, const hoc_cad_face *f,
-                                      double *uv) {
+static hoc_status gmsh_vertex_to_face_unlocked(void *ctx, const hoc_cad_vertex *v,
+                                               const hoc_cad_face *f, double *uv) {
   (void)ctx;
   int ierr = 0;
   double *p = NULL;
@@ -277,7 +278,7 @@ static hoc_status gmsh_vertex_to_face_unlocked(void *ctx, const hoc_cad_vertex *
 }
 
 static hoc_status gmsh_face_project_unlocked(void *ctx, const hoc_cad_face *f, size_t n,
-                                    const double *xyz, double *uv) {
+                                             const double *xyz, double *uv) {
   (void)ctx;
   if (!n) return HOC_OK;
   int ierr = 0;
@@ -294,7 +295,7 @@ static hoc_status gmsh_face_project_unlocked(void *ctx, const hoc_cad_face *f, s
 }
 
 static hoc_status gmsh_curve_project_unlocked(void *ctx, const hoc_cad_curve *c, size_t n,
-                                     const double *xyz, double *t) {
+                                              const double *xyz, double *t) {
   (void)ctx;
   if (!n) return HOC_OK;
   int ierr = 0;
@@ -311,28 +312,32 @@ static hoc_status gmsh_curve_project_unlocked(void *ctx, const hoc_cad_curve *c,
 }
 
 /* reparametrisation and projection: one caller at a time */
-static hoc_status gmsh_curve_to_face(void *ctx, const hoc_cad_curve *c, const hoc_cad_face *f, size_t n, const double *t, double *uv) {
+static hoc_status gmsh_curve_to_face(void *ctx, const hoc_cad_curve *c, const hoc_cad_face *f,
+                                     size_t n, const double *t, double *uv) {
   serial_begin(1);
   hoc_status st = gmsh_curve_to_face_unlocked(ctx, c, f, n, t, uv);
   serial_end(1);
   return st;
 }
 
-static hoc_status gmsh_vertex_to_face(void *ctx, const hoc_cad_vertex *v, const hoc_cad_face *f, double *uv) {
+static hoc_status gmsh_vertex_to_face(void *ctx, const hoc_cad_vertex *v, const hoc_cad_face *f,
+                                      double *uv) {
   serial_begin(1);
   hoc_status st = gmsh_vertex_to_face_unlocked(ctx, v, f, uv);
   serial_end(1);
   return st;
 }
 
-static hoc_status gmsh_face_project(void *ctx, const hoc_cad_face *f, size_t n, const double *xyz, double *uv) {
+static hoc_status gmsh_face_project(void *ctx, const hoc_cad_face *f, size_t n, const double *xyz,
+                                    double *uv) {
   serial_begin(1);
   hoc_status st = gmsh_face_project_unlocked(ctx, f, n, xyz, uv);
   serial_end(1);
   return st;
 }
 
-static hoc_status gmsh_curve_project(void *ctx, const hoc_cad_curve *c, size_t n, const double *xyz, double *t) {
+static hoc_status gmsh_curve_project(void *ctx, const hoc_cad_curve *c, size_t n, const double *xyz,
+                                     double *t) {
   serial_begin(1);
   hoc_status st = gmsh_curve_project_unlocked(ctx, c, n, xyz, t);
   serial_end(1);

@@ -18,7 +18,8 @@ static uint64_t mix(uint64_t k) {
 static hoc_status alloc_table(hoc_hash *h, size_t capacity) {
   h->slots = hoc_realloc(NULL, capacity, sizeof *h->slots); /* no zeroing: keys set below */
   HOC_CHECK(h->slots, HOC_ERR_MEMORY, "out of memory for a hash table of %zu entries", capacity);
-  for (size_t i = 0; i < capacity; ++i) h->slots[i].key = HOC_HASH_EMPTY;
+  for (size_t i = 0; i < capacity; ++i)
+    h->slots[i].key = HOC_HASH_EMPTY;
   h->capacity = capacity;
   h->count = 0;
   return HOC_OK;

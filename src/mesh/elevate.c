@@ -100,7 +100,8 @@ static hoc_status edge_table_build(edge_table *t, const size_t *conn, size_t ne,
       size_t a = conn[e * (size_t)stride + k], b = conn[e * (size_t)stride + (k + 1) % 3];
       t->start[(a < b ? a : b) + 1]++;
     }
-  for (size_t v = 0; v < nn; ++v) t->start[v + 1] += t->start[v];
+  for (size_t v = 0; v < nn; ++v)
+    t->start[v + 1] += t->start[v];
   memcpy(fill, t->start, (nn + 1) * sizeof *fill);
   for (size_t e = 0; e < ne; ++e)
     for (int k = 0; k < 3; ++k) {

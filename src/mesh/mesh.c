@@ -112,7 +112,8 @@ enum { CHUNK = 1024 };
 hoc_status hoc_split_groups(const size_t *start, int n_groups, size_t size, size_t **pieces,
                             size_t *n_pieces) {
   size_t n = 0;
-  for (int g = 0; g < n_groups; ++g) n += (start[g + 1] - start[g] + size - 1) / size;
+  for (int g = 0; g < n_groups; ++g)
+    n += (start[g + 1] - start[g] + size - 1) / size;
   size_t *piece;
   HOC_ALLOC(piece, 2 * n + 2);
   size_t k = 0;
@@ -154,17 +155,20 @@ static hoc_status eval_nodes(const hoc_mesh *m, int dim, double *xyz) {
         const size_t *nodes = order + a;
         hoc_status st;
         if (dim == HOC_ON_FACE) {
-          for (size_t k = 0; k < n; ++k) memcpy(par + 2 * k, m->param + 2 * nodes[k], 2 * sizeof *par);
+          for (size_t k = 0; k < n; ++k)
+            memcpy(par + 2 * k, m->param + 2 * nodes[k], 2 * sizeof *par);
           st = hoc_cad_face_eval(model, e, n, par, x, NULL, NULL);
         } else {
-          for (size_t k = 0; k < n; ++k) par[k] = m->param[2 * nodes[k]];
+          for (size_t k = 0; k < n; ++k)
+            par[k] = m->param[2 * nodes[k]];
           st = hoc_cad_curve_eval(model, e, n, par, x, NULL);
         }
         if (st != HOC_OK) {
           hoc_par_error_catch(&err, st);
           continue;
         }
-        for (size_t k = 0; k < n; ++k) memcpy(xyz + 3 * nodes[k], x + 3 * k, 3 * sizeof *x);
+        for (size_t k = 0; k < n; ++k)
+          memcpy(xyz + 3 * nodes[k], x + 3 * k, 3 * sizeof *x);
       }
       free(par);
       free(x);
@@ -230,7 +234,8 @@ static hoc_status slot_normal(const hoc_model *model, int f, const double *uv, c
     len = sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
   }
   double inv = len > 0 ? sign / len : 0.0;
-  for (int d = 0; d < 3; ++d) normal[d] = c[d] * inv;
+  for (int d = 0; d < 3; ++d)
+    normal[d] = c[d] * inv;
   return HOC_OK;
 }
 

@@ -69,11 +69,11 @@ typedef struct blockset {
   size_t *color_block;
   /* Blocks woken since their colour last ran, per colour (most sleep: a
    * colour then looks at these instead of all its blocks) */
-  int *block_color;     /* [n_blocks] */
-  size_t *queue_head;   /* [n_colors] first queued block, SIZE_MAX if none */
-  size_t *queue_next;   /* [n_blocks] next in its colour's queue */
-  unsigned char *queued;    /* [n_blocks] */
-  unsigned char *scan_all;  /* [n_colors] every block may be active: look at all */
+  int *block_color;        /* [n_blocks] */
+  size_t *queue_head;      /* [n_colors] first queued block, SIZE_MAX if none */
+  size_t *queue_next;      /* [n_blocks] next in its colour's queue */
+  unsigned char *queued;   /* [n_blocks] */
+  unsigned char *scan_all; /* [n_colors] every block may be active: look at all */
 } blockset;
 
 typedef struct opt {
@@ -136,16 +136,18 @@ typedef struct scratch {
 static void opt_free(opt *o) {
   for (int f = 0; f < 2; ++f) {
     blockset *b = &o->fam[f];
-    void *q[] = {b->bn_start, b->bn_node, b->be_start,   b->be_elem,    b->bd_start,
-                 b->node_block, b->node_off, b->carry_start, b->carry_node, b->carry_w,
-                 b->color_start, b->color_block, b->block_color, b->queue_head,
-                 b->queue_next, b->queued, b->scan_all};
+    void *q[] = {b->bn_start,    b->bn_node,     b->be_start,    b->be_elem,    b->bd_start,
+                 b->node_block,  b->node_off,    b->carry_start, b->carry_node, b->carry_w,
+                 b->color_start, b->color_block, b->block_color, b->queue_head, b->queue_next,
+                 b->queued,      b->scan_all};
     for (size_t i = 0; i < sizeof q / sizeof *q; ++i) free(q[i]);
   }
-  void *p[] = {o->ndof, o->ne_start, o->ne_elem, o->ne_local, o->ns_start, o->ns_slot,
-               o->nl_start, o->nl_line, o->dz, o->normal, o->delta, o->valid, o->pvalid, o->on_boundary,
-               o->region, o->was_region, o->dirty, o->delta_own, o->fe, o->qe, o->hsize, o->active, o->moving, o->step, o->alpha, o->f0, o->fnew,
-               o->slope, o->state, o->list, o->committed, o->tpar, o->txyz, o->tdz, o->tslot_uv, o->tnormal};
+  void *p[] = {o->ndof,      o->ne_start,    o->ne_elem, o->ne_local,   o->ns_start, o->ns_slot,
+               o->nl_start,  o->nl_line,     o->dz,      o->normal,     o->delta,    o->valid,
+               o->pvalid,    o->on_boundary, o->region,  o->was_region, o->dirty,    o->delta_own,
+               o->fe,        o->qe,          o->hsize,   o->active,     o->moving,   o->step,
+               o->alpha,     o->f0,          o->fnew,    o->slope,      o->state,    o->list,
+               o->committed, o->tpar,        o->txyz,    o->tdz,        o->tslot_uv, o->tnormal};
   for (size_t i = 0; i < sizeof p / sizeof *p; ++i) free(p[i]);
 }
 
@@ -570,10 +572,12 @@ static hoc_status eval_all(opt *o) {
     double *pp = par + 2 * first, *pa = a + 3 * first, *pb = b + 3 * first;
     hoc_status st;
     if (g < nf) {
-      for (size_t k = 0; k < n; ++k) memcpy(pp + 2 * k, m->param + 2 * nodes[k], 2 * sizeof *pp);
+      for (size_t k = 0; k < n; ++k)
+        memcpy(pp + 2 * k, m->param + 2 * nodes[k], 2 * sizeof *pp);
       st = hoc_cad_face_eval(o->model, g, n, pp, NULL, pa, pb);
     } else {
-      for (size_t k = 0; k < n; ++k) pp[k] = m->param[2 * nodes[k]];
+      for (size_t k = 0; k < n; ++k)
+        pp[k] = m->param[2 * nodes[k]];
       st = hoc_cad_curve_eval(o->model, g - nf, n, pp, NULL, pa);
       memset(pb, 0, 3 * n * sizeof *pb);
     }
@@ -821,7 +825,8 @@ static hoc_status eval_trial(opt *o, size_t i) {
       const double *old = o->normal + 3 * s;
       double *nw = o->tnormal + 3 * s;
       if (nw[0] * old[0] + nw[1] * old[1] + nw[2] * old[2] < 0)
-        for (int d = 0; d < 3; ++d) nw[d] = -nw[d];
+        for (int d = 0; d < 3; ++d)
+          nw[d] = -nw[d];
     }
   }
   return HOC_OK;
@@ -832,7 +837,8 @@ static hoc_status eval_trial(opt *o, size_t i) {
 static hoc_status eval_trials(opt *o, const size_t *list, size_t n, int nthreads) {
   hoc_par_error err = {0};
 #pragma omp parallel for schedule(dynamic, 16) num_threads(nthreads) if (n > 64)
-  for (size_t c = 0; c < n; ++c) hoc_par_error_catch(&err, eval_trial(o, list[c]));
+  for (size_t c = 0; c < n; ++c)
+    hoc_par_error_catch(&err, eval_trial(o, list[c]));
   return hoc_par_error_raise(&err);
 }
 
@@ -1207,7 +1213,8 @@ static void wake_node(opt *o, size_t k) {
 
 /* Every block may be active (after a change of every node's flag). */
 static void wake_all(opt *o) {
-  for (int f = 0; f < 2; ++f) memset(o->fam[f].scan_all, 1, (size_t)o->fam[f].n_colors);
+  for (int f = 0; f < 2; ++f)
+    memset(o->fam[f].scan_all, 1, (size_t)o->fam[f].n_colors);
 }
 
 /* The blocks of a colour with an active node into o->list (in an order that
@@ -1321,13 +1328,14 @@ static hoc_status do_color(opt *o, int color, scratch *scr, int nthreads, size_t
       /* wake every node of the elements it touches (itself included) */
       for (size_t c = o->B->be_start[b]; c < o->B->be_start[b + 1]; ++c) {
         const size_t *cn = m->conn + o->B->be_elem[c] * (size_t)o->np;
-        for (int i = 0; i < o->np; ++i) wake_node(o, cn[i]);
+        for (int i = 0; i < o->np; ++i)
+          wake_node(o, cn[i]);
       }
     }
     nt = keep;
   }
   for (size_t a = 0; a < nt; ++a) o->state[list[a]] = 0; /* gave up: asleep */
-  /* validity may have been gained where blocks moved */
+    /* validity may have been gained where blocks moved */
 #pragma omp parallel for schedule(dynamic, 8) num_threads(nthreads)
   for (size_t a = 0; a < n_committed; ++a) {
     size_t b = o->committed[a];

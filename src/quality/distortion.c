@@ -172,8 +172,8 @@ typedef struct point_walk {
   double fr[9 * FRAME_POINTS];
 } point_walk;
 
-static void walk_begin(point_walk *w, const hoc_quality_tables *t, const double *x,
-                       const double *n, int first, int last) {
+static void walk_begin(point_walk *w, const hoc_quality_tables *t, const double *x, const double *n,
+                       int first, int last) {
   w->t = t;
   w->x = x;
   w->n = n;
@@ -286,15 +286,16 @@ double hoc_element_node_residuals(const hoc_quality_tables *t, hoc_measure measu
     if (J) {
       double *Jj = J + 3 * (size_t)j * np;
       for (int i = 0; i < np; ++i)
-        for (int c = 0; c < 3; ++c) Jj[3 * i + c] = sw * (g1[c] * G[2 * i] + g2[c] * G[2 * i + 1]);
+        for (int c = 0; c < 3; ++c)
+          Jj[3 * i + c] = sw * (g1[c] * G[2 * i] + g2[c] * G[2 * i + 1]);
     }
   }
   return smin;
 }
 
 /* 1 if sigma <= 0 at one of the points first..last-1. */
-static int points_tangled(const hoc_quality_tables *t, const double *x, const double *n,
-                          int first, int last) {
+static int points_tangled(const hoc_quality_tables *t, const double *x, const double *n, int first,
+                          int last) {
   double a1[3], a2[3], nq[3], c[3];
   point_walk w;
   walk_begin(&w, t, x, n, first, last);

@@ -9,21 +9,22 @@
  * normal) at KW points from the tables' columns bx, by, bn (node i at
  * i HOC_QB) and the element's x, n. */
 #ifndef KFRAME_SUMS
-#define KFRAME_SUMS(bx, by, bn)                                                                   \
-  KV a10 = KSPLAT(0), a11 = a10, a12 = a10, a20 = a10, a21 = a10, a22 = a10;                      \
-  KV n0 = a10, n1 = a10, n2 = a10;                                                                \
-  for (int i = 0; i < np; ++i) {                                                                  \
-    KV gx = KLOAD((bx) + i * HOC_QB), gy = KLOAD((by) + i * HOC_QB), gn = KLOAD((bn) + i * HOC_QB); \
-    KV x0 = KSPLAT(x[3 * i]), x1 = KSPLAT(x[3 * i + 1]), x2 = KSPLAT(x[3 * i + 2]);               \
-    a10 += gx * x0;                                                                               \
-    a11 += gx * x1;                                                                               \
-    a12 += gx * x2;                                                                               \
-    a20 += gy * x0;                                                                               \
-    a21 += gy * x1;                                                                               \
-    a22 += gy * x2;                                                                               \
-    n0 += gn * KSPLAT(n[3 * i]);                                                                  \
-    n1 += gn * KSPLAT(n[3 * i + 1]);                                                              \
-    n2 += gn * KSPLAT(n[3 * i + 2]);                                                              \
+#define KFRAME_SUMS(bx, by, bn)                                                                    \
+  KV a10 = KSPLAT(0), a11 = a10, a12 = a10, a20 = a10, a21 = a10, a22 = a10;                       \
+  KV n0 = a10, n1 = a10, n2 = a10;                                                                 \
+  for (int i = 0; i < np; ++i) {                                                                   \
+    KV gx = KLOAD((bx) + i * HOC_QB), gy = KLOAD((by) + i * HOC_QB),                               \
+       gn = KLOAD((bn) + i * HOC_QB);                                                              \
+    KV x0 = KSPLAT(x[3 * i]), x1 = KSPLAT(x[3 * i + 1]), x2 = KSPLAT(x[3 * i + 2]);                \
+    a10 += gx * x0;                                                                                \
+    a11 += gx * x1;                                                                                \
+    a12 += gx * x2;                                                                                \
+    a20 += gy * x0;                                                                                \
+    a21 += gy * x1;                                                                                \
+    a22 += gy * x2;                                                                                \
+    n0 += gn * KSPLAT(n[3 * i]);                                                                   \
+    n1 += gn * KSPLAT(n[3 * i + 1]);                                                               \
+    n2 += gn * KSPLAT(n[3 * i + 2]);                                                               \
   }
 #endif
 
@@ -40,7 +41,8 @@ KATTR static void KNAME(const hoc_quality_tables *t, int oddy, const double *x, 
       KV cc = c0 * c0 + c1 * c1 + c2 * c2;
       double l2[KW], cl[KW];
       memcpy(l2, &cc, sizeof l2);
-      for (int l = 0; l < KW; ++l) cl[l] = sqrt(l2[l]);
+      for (int l = 0; l < KW; ++l)
+        cl[l] = sqrt(l2[l]);
       KV pos = KMASK01(c0 * n0 + c1 * n1 + c2 * n2 > KSPLAT(0));
       KV sig = KLOAD(cl) * (2 * pos - 1);
       KV g11 = a10 * a10 + a11 * a11 + a12 * a12, g22 = a20 * a20 + a21 * a21 + a22 * a22;
