@@ -206,6 +206,25 @@ hoc_status hoc_mesh_measure(const hoc_mesh *mesh, hoc_measure measure, double *q
 /** CAD face tag of element e (0-based), or -1 if out of range. */
 int hoc_mesh_element_face_tag(const hoc_mesh *mesh, size_t e);
 
+/** A corner of an element at a CAD vertex where both of the element's
+ *  edges lie on CAD curves that meet there at a small angle (a cusp of the
+ *  model). The element follows both curves, so as the order grows its
+ *  angle at that corner tends to the curves' angle and its distortion
+ *  grows without bound: no placement of the nodes on the CAD gives it the
+ *  quality of its straight-sided linear element. */
+typedef struct hoc_cusp {
+  int vertex_tag;       /* CAD vertex at the corner */
+  int curve_tags[2];    /* the two curves */
+  double angle_degrees; /* between the curves' tangents at the vertex */
+} hoc_cusp;
+
+/** The sharpest corner of element e at a CAD cusp of angle below
+ *  max_angle_degrees. *found is 1 and *cusp filled if there is one, else 0.
+ *  @return HOC_ERR_ARGUMENT on an element out of range, HOC_ERR_CAD if the
+ *          kernel fails to evaluate a curve */
+hoc_status hoc_mesh_element_cusp(const hoc_mesh *mesh, size_t e, double max_angle_degrees,
+                                 hoc_cusp *cusp, int *found);
+
 /* ------------------------------------------------------------------------ */
 /* Untangling and smoothing                                                 */
 

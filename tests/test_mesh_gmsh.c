@@ -201,7 +201,44 @@ done:
   hoc_model_destroy(&model);
 }
 
+/* gmsh_t20_component8.step has cusps: at each of its vertices 1 to 6 two
+ * faces end in a sliver between tangent curves (curves 1 and 9 at vertex 2,
+ * for one: 8.5e-7 degrees apart, measured directly through gmsh). One
+ * element fills each sliver; exactly those 12 are found. */
+static void test_cusp(void) {
+  char path[1024];
+  snprintf(path, sizeof path, "%s/gmsh_t20_component8.step", HOC_MODELS_DIR);
+  hoc_model *model;
+  CHECK_OK(hoc_model_open(path, &model));
+  if (!model) return;
+  hoc_mesh *lin = NULL, *m = NULL;
+  CHECK_OK(hoc_mesh_generate_linear(model, NULL, &lin));
+  CHECK_OK(hoc_mesh_elevate(lin, 3, HOC_NODES_EQUISPACED, &m));
+  size_t hits = 0;
+  int seen_1_9 = 0;
+  for (size_t e = 0; m && e < m->n_elems; ++e) {
+    hoc_cusp c;
+    int found = -1;
+    CHECK_OK(hoc_mesh_element_cusp(m, e, 10.0, &c, &found));
+    if (!found) continue;
+    ++hits;
+    CHECK(c.vertex_tag >= 1 && c.vertex_tag <= 6);
+    CHECK(c.angle_degrees >= 0 && c.angle_degrees < 1e-3);
+    seen_1_9 |= c.vertex_tag == 2 && ((c.curve_tags[0] == 1 && c.curve_tags[1] == 9) ||
+                                      (c.curve_tags[0] == 9 && c.curve_tags[1] == 1));
+  }
+  CHECK(hits == 12);
+  CHECK(seen_1_9);
+  hoc_cusp c;
+  int found;
+  CHECK_STATUS(hoc_mesh_element_cusp(m, m ? m->n_elems : 0, 2.0, &c, &found), HOC_ERR_ARGUMENT);
+  hoc_mesh_destroy(&m);
+  hoc_mesh_destroy(&lin);
+  hoc_model_destroy(&model);
+}
+
 int main(void) {
+  test_cusp();
   test_concurrent_eval("occt_bottle.brep");
   test_bad_input();
   test_model("gmsh_t20_component8.step", 0.15);

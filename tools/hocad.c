@@ -622,6 +622,40 @@ static void report_tangled(const hoc_mesh *mesh, const double *q, int optimized)
   fprintf(stderr, "%s\n", total > shown ? " ..." : "");
 }
 
+/* Elements that end below 0.9 x the linear mesh's worst and have a corner at
+ * a cusp of the CAD: say so, and what the rest of the mesh reaches. That
+ * loss is the model's, not the optimiser's (see hoc_cusp). */
+static void report_cusps(const report *r, const hoc_mesh *mesh, const double *q) {
+  double bound = 0.9 * r->stages[0].stats.min, rest = INFINITY;
+  size_t ne = hoc_mesh_num_elements(mesh), low = 0, at_cusp = 0;
+  char list[512] = "";
+  size_t len = 0;
+  for (size_t e = 0; e < ne; ++e) {
+    if (!(q[e] < bound) || q[e] == 0.0) {
+      if (q[e] < rest) rest = q[e];
+      continue;
+    }
+    ++low;
+    hoc_cusp c;
+    int found = 0;
+    if (hoc_mesh_element_cusp(mesh, e, 2.0, &c, &found) != HOC_OK || !found) {
+      if (q[e] < rest) rest = q[e];
+      continue;
+    }
+    if (++at_cusp <= 3 && len < sizeof list)
+      len += (size_t)snprintf(list + len, sizeof list - len, "%selement %zu at vertex %d (curves %d and %d, %.2g degrees)",
+                              at_cusp > 1 ? "; " : "", e + 1, c.vertex_tag, c.curve_tags[0],
+                              c.curve_tags[1], c.angle_degrees);
+  }
+  if (!at_cusp) return;
+  fprintf(stderr,
+          "%s: note: %zu of the %zu element(s) below 0.9 x the linear mesh's min q (%.4f) have a "
+          "corner at a cusp of the CAD, where two of its curves meet at under 2 degrees (%s%s): "
+          "following both curves, such an element closes there as the order grows and cannot "
+          "keep its linear element's quality; the other elements' min q is %.4f\n",
+          program, at_cusp, low, r->stages[0].stats.min, list, at_cusp > 3 ? "; ..." : "", rest);
+}
+
 /* Write the requested files for `mesh` with per-element q. */
 static int write_outputs(const options *o, const hoc_mesh *mesh, const double *q, const char *out) {
   hoc_status st;
@@ -810,6 +844,7 @@ static int cmd_mesh(int argc, char **argv) {
     if ((code = write_pictures(&o, n, stages, final, q))) goto done;
   }
   report_tangled(final, q, o.optimize && o.order > 1);
+  if (o.optimize && o.order > 1) report_cusps(&r, final, q);
   if (r.stages[r.n - 1].stats.tangled) code = EXIT_TANGLED;
   if (!code && hoc_mesh_num_failed_faces(lin)) code = EXIT_PARTIAL;
 done:

@@ -3,6 +3,7 @@
 #include "mesh/mesh.h"
 
 #include <math.h>
+#include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -104,6 +105,63 @@ static hoc_status group_nodes(const hoc_mesh *m, int dim, int n_entities, size_t
   free(fill);
   *start_out = start;
   *order_out = order;
+  return HOC_OK;
+}
+
+/* Cusps ------------------------------------------------------------------- */
+
+/* Unit tangent, pointing along the line away from its end `end` (0 or 1),
+ * of the curve of line l at that end. */
+static hoc_status line_end_tangent(const hoc_mesh *m, size_t l, int end, double *d) {
+  double t0 = m->line_t[2 * l + (size_t)end], t1 = m->line_t[2 * l + (size_t)(1 - end)];
+  double x[3];
+  HOC_TRY(hoc_cad_curve_eval(m->model, m->line_curve[l], 1, &t0, x, d));
+  double s = t1 >= t0 ? 1.0 : -1.0, len = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+  for (int k = 0; k < 3; ++k) d[k] = len > 0 ? s * d[k] / len : 0.0;
+  return HOC_OK;
+}
+
+/* The line from node a to node b (a CAD curve edge), or SIZE_MAX; *end is
+ * the end of the line at a. */
+static size_t find_line(const hoc_mesh *m, size_t a, size_t b, int *end) {
+  size_t lp = (size_t)m->order + 1;
+  for (size_t l = 0; l < m->n_lines; ++l) {
+    const size_t *ln = m->line_conn + l * lp;
+    if ((ln[0] == a && ln[1] == b) || (ln[0] == b && ln[1] == a)) {
+      *end = ln[0] == a ? 0 : 1;
+      return l;
+    }
+  }
+  return SIZE_MAX;
+}
+
+hoc_status hoc_mesh_element_cusp(const hoc_mesh *mesh, size_t e, double max_angle_degrees,
+                                 hoc_cusp *cusp, int *found) {
+  HOC_CHECK(mesh && cusp && found, HOC_ERR_ARGUMENT, "NULL argument");
+  *found = 0;
+  HOC_CHECK(e < mesh->n_elems, HOC_ERR_ARGUMENT, "element %zu out of range", e + 1);
+  const size_t *cn = mesh->conn + e * (size_t)mesh->np;
+  double best = max_angle_degrees;
+  for (int k = 0; k < 3; ++k) {
+    size_t v = cn[k];
+    if (mesh->dim[v] != HOC_ON_VERTEX) continue;
+    int end[2];
+    size_t l[2] = {find_line(mesh, v, cn[(k + 1) % 3], &end[0]),
+                   find_line(mesh, v, cn[(k + 2) % 3], &end[1])};
+    if (l[0] == SIZE_MAX || l[1] == SIZE_MAX) continue;
+    double d[2][3];
+    for (int j = 0; j < 2; ++j) HOC_TRY(line_end_tangent(mesh, l[j], end[j], d[j]));
+    double c = d[0][0] * d[1][0] + d[0][1] * d[1][1] + d[0][2] * d[1][2];
+    double angle = acos(c > 1 ? 1 : c < -1 ? -1 : c) * (180 / 3.14159265358979323846);
+    if (angle < best) {
+      best = angle;
+      *found = 1;
+      cusp->vertex_tag = mesh->model->vertices[mesh->entity[v]].tag;
+      for (int j = 0; j < 2; ++j)
+        cusp->curve_tags[j] = mesh->model->curves[mesh->line_curve[l[j]]].tag;
+      cusp->angle_degrees = angle;
+    }
+  }
   return HOC_OK;
 }
 
