@@ -252,7 +252,7 @@ static const char *usage_mesh =
     "  --histogram F.png    histogram of q per stage\n"
     PICTURE_OPTIONS("--png-size")
     "  --no-output          write no mesh file\n"
-    "  --threads N          threads for measuring (default: all cores)\n"
+    "  --threads N          threads (default: all cores)\n"
     "  -q, --quiet          print only errors\n";
 
 static const char *usage_optimize =
