@@ -630,20 +630,21 @@ static void report_cusps(const report *r, const hoc_mesh *mesh, const double *q)
   size_t ne = hoc_mesh_num_elements(mesh), low = 0, at_cusp = 0;
   char list[512] = "";
   size_t len = 0;
+  if (r->n < 2 || !(r->stages[r->n - 1].stats.min < bound)) return; /* none below */
   for (size_t e = 0; e < ne; ++e) {
-    if (!(q[e] < bound) || q[e] == 0.0) {
-      if (q[e] < rest) rest = q[e];
-      continue;
-    }
-    ++low;
     hoc_cusp c;
     int found = 0;
-    if (hoc_mesh_element_cusp(mesh, e, 2.0, &c, &found) != HOC_OK || !found) {
+    if (hoc_mesh_element_cusp(mesh, e, 2.0, &c, &found) != HOC_OK) found = 0;
+    if (!found) {
       if (q[e] < rest) rest = q[e];
+      low += q[e] < bound && q[e] > 0.0;
       continue;
     }
+    if (!(q[e] < bound) || q[e] == 0.0) continue;
+    ++low;
     if (++at_cusp <= 3 && len < sizeof list)
-      len += (size_t)snprintf(list + len, sizeof list - len, "%selement %zu at vertex %d (curves %d and %d, %.2g degrees)",
+      len += (size_t)snprintf(list + len, sizeof list - len,
+                              "%selement %zu at vertex %d (curves %d and %d, %.2g degrees)",
                               at_cusp > 1 ? "; " : "", e + 1, c.vertex_tag, c.curve_tags[0],
                               c.curve_tags[1], c.angle_degrees);
   }
@@ -652,7 +653,7 @@ static void report_cusps(const report *r, const hoc_mesh *mesh, const double *q)
           "%s: note: %zu of the %zu element(s) below 0.9 x the linear mesh's min q (%.4f) have a "
           "corner at a cusp of the CAD, where two of its curves meet at under 2 degrees (%s%s): "
           "following both curves, such an element closes there as the order grows and cannot "
-          "keep its linear element's quality; the other elements' min q is %.4f\n",
+          "keep its linear element's quality; the elements at no cusp have min q %.4f\n",
           program, at_cusp, low, r->stages[0].stats.min, list, at_cusp > 3 ? "; ..." : "", rest);
 }
 
