@@ -27,13 +27,13 @@
  * A block whose step lowers f by less than a small share of f goes to
  * sleep; the iteration ends when every block sleeps.
  */
-#include "core/hash.h"
 #include "mesh/mesh.h"
 #include "quality/quality.h"
 
 #include <float.h>
 #include <math.h>
 #include <omp.h>
+#include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
@@ -234,10 +234,8 @@ static hoc_status build_blocks(opt *o, int family) {
   HOC_ALLOC(o->B->node_block, nn);
   HOC_ALLOC(o->B->node_off, nn);
   for (size_t i = 0; i < nn; ++i) o->B->node_block[i] = SIZE_MAX;
-  hoc_hash edges = {0};
   growlist start = {0}, nodes = {0};
   hoc_status status = HOC_OK;
-  HOC_TRY_GOTO(hoc_hash_init(&edges, 2 * ne), done);
   /* vertex blocks first, then edge blocks, then interior blocks */
   for (int kind = 0; kind < 3; ++kind)
     for (size_t e = 0; e < ne; ++e) {
@@ -263,10 +261,8 @@ static hoc_status build_blocks(opt *o, int family) {
           HOC_TRY_GOTO(grow_push(&nodes, i), done);
         }
       } else if (kind == 1) {
+        /* an edge seen from its second element has its nodes in a block already */
         for (int k = 0; k < 3 && p > 1; ++k) {
-          int found;
-          HOC_TRY_GOTO(hoc_hash_insert(&edges, hoc_pair_key(cn[k], cn[(k + 1) % 3]), 0, &found, NULL), done);
-          if (found) continue;
           size_t first = nodes.n;
           for (int j = 0; j < p - 1; ++j) {
             size_t i = cn[3 + k * (p - 1) + j];
@@ -437,7 +433,6 @@ static hoc_status build_blocks(opt *o, int family) {
     free(stamp);
   }
 done:
-  hoc_hash_free(&edges);
   free(start.v);
   free(nodes.v);
   return status;
