@@ -626,21 +626,22 @@ static void report_tangled(const hoc_mesh *mesh, const double *q, int optimized)
  * a cusp of the CAD: say so, and what the rest of the mesh reaches. That
  * loss is the model's, not the optimiser's (see hoc_cusp). */
 static void report_cusps(const report *r, const hoc_mesh *mesh, const double *q) {
-  double bound = 0.9 * r->stages[0].stats.min, rest = INFINITY;
+  double bound = 0.9 * r->stages[0].stats.min, rest = 1; /* q <= 1 */
   size_t ne = hoc_mesh_num_elements(mesh), low = 0, at_cusp = 0;
   char list[512] = "";
   size_t len = 0;
   if (r->n < 2 || !(r->stages[r->n - 1].stats.min < bound)) return; /* none below */
   for (size_t e = 0; e < ne; ++e) {
+    if (q[e] == 0.0 || (q[e] >= bound && q[e] >= rest)) continue; /* changes nothing below */
     hoc_cusp c;
     int found = 0;
     if (hoc_mesh_element_cusp(mesh, e, 2.0, &c, &found) != HOC_OK) found = 0;
     if (!found) {
       if (q[e] < rest) rest = q[e];
-      low += q[e] < bound && q[e] > 0.0;
+      low += q[e] < bound;
       continue;
     }
-    if (!(q[e] < bound) || q[e] == 0.0) continue;
+    if (!(q[e] < bound)) continue;
     ++low;
     if (++at_cusp <= 3 && len < sizeof list)
       len += (size_t)snprintf(list + len, sizeof list - len,

@@ -149,8 +149,10 @@ void hoc_quiet_end(hoc_quiet *q, char *first_error, size_t size) {
 
 /* Backend operations ----------------------------------------------------- */
 
+/* Evaluation without the lock. A failure's message comes from gmsh's global
+ * logger, read only when `message` (the caller then holds the lock). */
 static hoc_status gmsh_face_eval_raw(const hoc_cad_face *f, size_t n, const double *uv, double *xyz,
-                                     double *du, double *dv) {
+                                     double *du, double *dv, int message) {
   int ierr = 0;
   if (xyz) {
     double *x = NULL;
@@ -158,7 +160,7 @@ static hoc_status gmsh_face_eval_raw(const hoc_cad_face *f, size_t n, const doub
     gmshModelGetValue(2, f->tag, (double *)uv, 2 * n, &x, &nx, &ierr);
     if (ierr || nx != 3 * n) {
       gmshFree(x);
-      return hoc_gmsh_error("surface evaluation");
+      return message ? hoc_gmsh_error("surface evaluation") : HOC_ERR_CAD;
     }
     memcpy(xyz, x, 3 * n * sizeof *x);
     gmshFree(x);
@@ -169,7 +171,7 @@ static hoc_status gmsh_face_eval_raw(const hoc_cad_face *f, size_t n, const doub
     gmshModelGetDerivative(2, f->tag, (double *)uv, 2 * n, &d, &nd, &ierr);
     if (ierr || nd != 6 * n) {
       gmshFree(d);
-      return hoc_gmsh_error("surface derivative");
+      return message ? hoc_gmsh_error("surface derivative") : HOC_ERR_CAD;
     }
     for (size_t i = 0; i < n; ++i)
       for (int k = 0; k < 3; ++k) {
@@ -185,13 +187,12 @@ static hoc_status gmsh_face_eval(void *ctx, const hoc_cad_face *f, size_t n, con
                                  double *xyz, double *du, double *dv) {
   (void)ctx;
   if (!n) return HOC_OK;
-  /* an error message comes from gmsh's global logger: read it under the lock */
   int lock = !f->concurrent;
   serial_begin(lock);
-  hoc_status st = gmsh_face_eval_raw(f, n, uv, xyz, du, dv);
-  if (st != HOC_OK && !lock) {
+  hoc_status st = gmsh_face_eval_raw(f, n, uv, xyz, du, dv, lock);
+  if (st != HOC_OK && !lock) { /* again under the lock, for the message */
     serial_begin(1);
-    st = gmsh_face_eval_raw(f, n, uv, xyz, du, dv);
+    st = gmsh_face_eval_raw(f, n, uv, xyz, du, dv, 1);
     serial_end(1);
   }
   serial_end(lock);
@@ -199,7 +200,7 @@ static hoc_status gmsh_face_eval(void *ctx, const hoc_cad_face *f, size_t n, con
 }
 
 static hoc_status gmsh_curve_eval_raw(const hoc_cad_curve *c, size_t n, const double *t,
-                                      double *xyz, double *dt) {
+                                      double *xyz, double *dt, int message) {
   int ierr = 0;
   if (xyz) {
     double *x = NULL;
@@ -207,7 +208,7 @@ static hoc_status gmsh_curve_eval_raw(const hoc_cad_curve *c, size_t n, const do
     gmshModelGetValue(1, c->tag, (double *)t, n, &x, &nx, &ierr);
     if (ierr || nx != 3 * n) {
       gmshFree(x);
-      return hoc_gmsh_error("curve evaluation");
+      return message ? hoc_gmsh_error("curve evaluation") : HOC_ERR_CAD;
     }
     memcpy(xyz, x, 3 * n * sizeof *x);
     gmshFree(x);
@@ -218,7 +219,7 @@ static hoc_status gmsh_curve_eval_raw(const hoc_cad_curve *c, size_t n, const do
     gmshModelGetDerivative(1, c->tag, (double *)t, n, &d, &nd, &ierr);
     if (ierr || nd != 3 * n) {
       gmshFree(d);
-      return hoc_gmsh_error("curve derivative");
+      return message ? hoc_gmsh_error("curve derivative") : HOC_ERR_CAD;
     }
     memcpy(dt, d, 3 * n * sizeof *d);
     gmshFree(d);
@@ -232,10 +233,10 @@ static hoc_status gmsh_curve_eval(void *ctx, const hoc_cad_curve *c, size_t n, c
   if (!n) return HOC_OK;
   int lock = !c->concurrent;
   serial_begin(lock);
-  hoc_status st = gmsh_curve_eval_raw(c, n, t, xyz, dt);
-  if (st != HOC_OK && !lock) {
+  hoc_status st = gmsh_curve_eval_raw(c, n, t, xyz, dt, lock);
+  if (st != HOC_OK && !lock) { /* again under the lock, for the message */
     serial_begin(1);
-    st = gmsh_curve_eval_raw(c, n, t, xyz, dt);
+    st = gmsh_curve_eval_raw(c, n, t, xyz, dt, 1);
     serial_end(1);
   }
   serial_end(lock);

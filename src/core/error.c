@@ -41,12 +41,14 @@ void hoc_par_error_catch(hoc_par_error *e, hoc_status st) {
   if (e->status == HOC_OK) {
     e->status = st;
     snprintf(e->message, sizeof e->message, "%s", error_message);
+    snprintf(e->location, sizeof e->location, "%s", error_location);
   }
 }
 
 hoc_status hoc_par_error_raise(const hoc_par_error *e) {
   if (e->status == HOC_OK) return HOC_OK;
   snprintf(error_message, sizeof error_message, "%s", e->message);
+  snprintf(error_location, sizeof error_location, "%s", e->location);
   return e->status;
 }
 

@@ -26,7 +26,7 @@ void hoc_error_clear(void);
  *  thread (messages are per thread). */
 typedef struct hoc_par_error {
   hoc_status status;
-  char message[512];
+  char message[512], location[256];
 } hoc_par_error;
 
 /** Keep status st (with this thread's message) if it is the first failure. */

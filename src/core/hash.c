@@ -15,11 +15,13 @@ static uint64_t mix(uint64_t k) {
   return k;
 }
 
+/* A new empty table in *h (left as it was on failure). */
 static hoc_status alloc_table(hoc_hash *h, size_t capacity) {
-  h->slots = hoc_realloc(NULL, capacity, sizeof *h->slots); /* no zeroing: keys set below */
-  HOC_CHECK(h->slots, HOC_ERR_MEMORY, "out of memory for a hash table of %zu entries", capacity);
+  hoc_hash_slot *slots = hoc_realloc(NULL, capacity, sizeof *slots); /* keys set below */
+  HOC_CHECK(slots, HOC_ERR_MEMORY, "out of memory for a hash table of %zu entries", capacity);
   for (size_t i = 0; i < capacity; ++i)
-    h->slots[i].key = HOC_HASH_EMPTY;
+    slots[i].key = HOC_HASH_EMPTY;
+  h->slots = slots;
   h->capacity = capacity;
   h->count = 0;
   return HOC_OK;
@@ -49,9 +51,10 @@ size_t hoc_hash_get(const hoc_hash *h, uint64_t key) {
 static hoc_status grow(hoc_hash *h) {
   hoc_hash old = *h;
   HOC_TRY(alloc_table(h, old.capacity * 2));
+  /* reinserting cannot grow again (the new table is half full at most) */
   for (size_t i = 0; i < old.capacity; ++i)
     if (old.slots[i].key != HOC_HASH_EMPTY)
-      HOC_TRY(hoc_hash_insert(h, old.slots[i].key, old.slots[i].value, NULL, NULL));
+      (void)hoc_hash_insert(h, old.slots[i].key, old.slots[i].value, NULL, NULL);
   free(old.slots);
   return HOC_OK;
 }

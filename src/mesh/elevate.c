@@ -22,7 +22,7 @@ typedef struct builder {
   int *ent;
 } builder;
 
-/* Room for n nodes up front (an upper bound: pages never written cost no memory). */
+/* Room for n nodes up front (an upper bound). */
 static hoc_status builder_reserve(builder *b, size_t n) {
   b->par = hoc_realloc(NULL, 2 * n, sizeof *b->par);
   b->dim = hoc_realloc(NULL, n, sizeof *b->dim);
@@ -162,11 +162,13 @@ static hoc_status reinterpolate(const hoc_mesh *in, int p, hoc_nodeset set, hoc_
   HOC_ALLOC_GOTO(edge_first, 3 * ne, done);
   HOC_ALLOC_GOTO(edge_a, 3 * ne, done);
   for (size_t i = 0; i < in->n_nodes; ++i) vmap[i] = SIZE_MAX;
-  HOC_TRY_GOTO(builder_reserve(&b, in->n_nodes + ne * (3 * (size_t)(p - 1) + (size_t)(np - 3 * p))),
-               done);
   HOC_ALLOC_GOTO(elem_edge, 3 * ne, done);
   HOC_ALLOC_GOTO(edge_new, 3 * ne, done);
   HOC_TRY_GOTO(edge_table_build(&edges, in->conn, ne, npi, in->n_nodes, elem_edge, edge_new), done);
+  /* corners (at most the source's nodes), edge nodes, interior nodes */
+  HOC_TRY_GOTO(builder_reserve(&b, in->n_nodes + edges.n_edges * (size_t)(p - 1) +
+                                       ne * (size_t)(np - 3 * p)),
+               done);
   HOC_TRY_GOTO(hoc_hash_init(&lines, in->n_lines), done);
   for (size_t l = 0; l < in->n_lines; ++l) {
     const size_t *ln = in->line_conn + l * (size_t)(pin + 1);

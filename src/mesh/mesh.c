@@ -110,29 +110,53 @@ static hoc_status group_nodes(const hoc_mesh *m, int dim, int n_entities, size_t
 
 /* Cusps ------------------------------------------------------------------- */
 
-/* Unit tangent, pointing along the line away from its end `end` (0 or 1),
- * of the curve of line l at that end. */
-static hoc_status line_end_tangent(const hoc_mesh *m, size_t l, int end, double *d) {
-  double t0 = m->line_t[2 * l + (size_t)end], t1 = m->line_t[2 * l + (size_t)(1 - end)];
+/* Unit tangent at CAD vertex `vertex` of curve c, pointing into the curve
+ * towards parameter t_in (a point of the curve near the vertex). */
+static hoc_status curve_tangent_at(const hoc_model *model, int c, int vertex, double t_in,
+                                   double *d) {
+  const hoc_cad_curve *cv = &model->curves[c];
+  double t;
+  if (cv->v0 == vertex && cv->v1 == vertex) /* closed: the end nearer t_in */
+    t = fabs(t_in - cv->lo) <= fabs(cv->hi - t_in) ? cv->lo : cv->hi;
+  else if (cv->v0 == vertex)
+    t = cv->lo;
+  else if (cv->v1 == vertex)
+    t = cv->hi;
+  else
+    return HOC_ERROR(HOC_ERR_MISMATCH, "curve %d does not end at vertex %d", cv->tag,
+                     model->vertices[vertex].tag);
   double x[3];
-  HOC_TRY(hoc_cad_curve_eval(m->model, m->line_curve[l], 1, &t0, x, d));
-  double s = t1 >= t0 ? 1.0 : -1.0, len = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+  HOC_TRY(hoc_cad_curve_eval(model, c, 1, &t, x, d));
+  double s = t_in >= t ? 1.0 : -1.0, len = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
   for (int k = 0; k < 3; ++k) d[k] = len > 0 ? s * d[k] / len : 0.0;
   return HOC_OK;
 }
 
-/* The line from node a to node b (a CAD curve edge), or SIZE_MAX; *end is
- * the end of the line at a. */
-static size_t find_line(const hoc_mesh *m, size_t a, size_t b, int *end) {
-  size_t lp = (size_t)m->order + 1;
+/* Curve and curve parameter of the element edge from corner `from` to
+ * corner `to`, seen next to `from`: from the edge node next to it (order >=
+ * 2), else from the line joining the two corners. -1 if the edge is not on
+ * a CAD curve. */
+static int edge_curve(const hoc_mesh *m, size_t e, int from, int to, double *t_near) {
+  const size_t *cn = m->conn + e * (size_t)m->np;
+  int p = m->order;
+  if (p >= 2) {
+    /* gmsh order: edge k runs from corner k to corner k + 1 */
+    int k = (to == (from + 1) % 3) ? from : to;
+    int j = k == from ? 0 : p - 2;
+    size_t w = cn[3 + k * (p - 1) + j];
+    if (m->dim[w] != HOC_ON_CURVE) return -1;
+    *t_near = m->param[2 * w];
+    return m->entity[w];
+  }
+  size_t a = cn[from], b = cn[to];
   for (size_t l = 0; l < m->n_lines; ++l) {
-    const size_t *ln = m->line_conn + l * lp;
+    const size_t *ln = m->line_conn + l * 2;
     if ((ln[0] == a && ln[1] == b) || (ln[0] == b && ln[1] == a)) {
-      *end = ln[0] == a ? 0 : 1;
-      return l;
+      *t_near = m->line_t[2 * l + (ln[0] == a ? 1 : 0)];
+      return m->line_curve[l];
     }
   }
-  return SIZE_MAX;
+  return -1;
 }
 
 hoc_status hoc_mesh_element_cusp(const hoc_mesh *mesh, size_t e, double max_angle_degrees,
@@ -145,20 +169,17 @@ hoc_status hoc_mesh_element_cusp(const hoc_mesh *mesh, size_t e, double max_angl
   for (int k = 0; k < 3; ++k) {
     size_t v = cn[k];
     if (mesh->dim[v] != HOC_ON_VERTEX) continue;
-    int end[2];
-    size_t l[2] = {find_line(mesh, v, cn[(k + 1) % 3], &end[0]),
-                   find_line(mesh, v, cn[(k + 2) % 3], &end[1])};
-    if (l[0] == SIZE_MAX || l[1] == SIZE_MAX) continue;
-    double d[2][3];
-    for (int j = 0; j < 2; ++j) HOC_TRY(line_end_tangent(mesh, l[j], end[j], d[j]));
-    double c = d[0][0] * d[1][0] + d[0][1] * d[1][1] + d[0][2] * d[1][2];
-    double angle = acos(c > 1 ? 1 : c < -1 ? -1 : c) * (180 / 3.14159265358979323846);
+    double t[2], d[2][3];
+    int c[2] = {edge_curve(mesh, e, k, (k + 1) % 3, &t[0]), edge_curve(mesh, e, k, (k + 2) % 3, &t[1])};
+    if (c[0] < 0 || c[1] < 0) continue;
+    for (int j = 0; j < 2; ++j) HOC_TRY(curve_tangent_at(mesh->model, c[j], mesh->entity[v], t[j], d[j]));
+    double dot = d[0][0] * d[1][0] + d[0][1] * d[1][1] + d[0][2] * d[1][2];
+    double angle = acos(dot > 1 ? 1 : dot < -1 ? -1 : dot) * (180 / 3.14159265358979323846);
     if (angle < best) {
       best = angle;
       *found = 1;
       cusp->vertex_tag = mesh->model->vertices[mesh->entity[v]].tag;
-      for (int j = 0; j < 2; ++j)
-        cusp->curve_tags[j] = mesh->model->curves[mesh->line_curve[l[j]]].tag;
+      for (int j = 0; j < 2; ++j) cusp->curve_tags[j] = mesh->model->curves[c[j]].tag;
       cusp->angle_degrees = angle;
     }
   }
@@ -207,7 +228,7 @@ static hoc_status eval_nodes(const hoc_mesh *m, int dim, double *xyz) {
       if (!par || !x) hoc_par_error_catch(&err, HOC_ERROR(HOC_ERR_MEMORY, "out of memory"));
 #pragma omp for schedule(dynamic, 1)
       for (size_t c = 0; c < n_chunks; ++c) {
-        if (!par || !x || err.status != HOC_OK) continue;
+        if (!par || !x) continue;
         int e = (int)chunk[2 * c];
         size_t a = chunk[2 * c + 1], n = start[e + 1] - a < CHUNK ? start[e + 1] - a : CHUNK;
         const size_t *nodes = order + a;
@@ -323,7 +344,7 @@ hoc_status hoc_mesh_slot_normals(const hoc_mesh *m, double *normal) {
     if (!uv || !du || !dv) hoc_par_error_catch(&err, HOC_ERROR(HOC_ERR_MEMORY, "out of memory"));
 #pragma omp for schedule(dynamic, 1)
     for (size_t c = 0; c < n_chunks; ++c) {
-      if (!uv || !du || !dv || err.status != HOC_OK) continue;
+      if (!uv || !du || !dv) continue;
       int f = (int)chunk[2 * c];
       size_t a = chunk[2 * c + 1], n = start[f + 1] - a < CHUNK ? start[f + 1] - a : CHUNK;
       const hoc_cad_face *face = &model->faces[f];

@@ -558,7 +558,7 @@ static hoc_status eval_all(opt *o) {
   size_t *piece = NULL, n_pieces = 0;
   HOC_TRY_GOTO(hoc_split_groups(start, nf + nc, 1024, &piece, &n_pieces), done);
   hoc_par_error err = {0};
-#pragma omp parallel for schedule(dynamic, 1)
+#pragma omp parallel for schedule(dynamic, 1) if (o->model->thread_safe)
   for (size_t c = 0; c < n_pieces; ++c) {
     int g = (int)piece[2 * c];
     size_t first = piece[2 * c + 1], n = start[g + 1] - first < 1024 ? start[g + 1] - first : 1024;
@@ -831,7 +831,8 @@ static hoc_status eval_trial(opt *o, size_t i) {
  * node twice), on nthreads threads. */
 static hoc_status eval_trials(opt *o, const size_t *list, size_t n, int nthreads) {
   hoc_par_error err = {0};
-#pragma omp parallel for schedule(dynamic, 16) num_threads(nthreads) if (n > 64)
+#pragma omp parallel for schedule(dynamic, 16) num_threads(nthreads) \
+    if (n > 64 && o->model->thread_safe)
   for (size_t c = 0; c < n; ++c)
     hoc_par_error_catch(&err, eval_trial(o, list[c]));
   return hoc_par_error_raise(&err);
@@ -1403,7 +1404,7 @@ hoc_status hoc_mesh_optimize(hoc_mesh *mesh, const hoc_optimize_options *options
   HOC_CHECK(o.max_iterations <= 1000000, HOC_ERR_ARGUMENT, "too many iterations requested");
   HOC_CHECK(isfinite(o.tolerance), HOC_ERR_ARGUMENT, "tolerance must be a finite number");
   double t0 = now();
-  opt ctx;
+  opt ctx = {0};
   scratch *scr = NULL;
   int nthreads = omp_get_max_threads();
   /* every node on the CAD from the start (a mesh read as written may have
@@ -1560,7 +1561,7 @@ hoc_status hoc_mesh_check_gradient(hoc_mesh *mesh, hoc_measure measure, int fix_
                                    int samples, double *max_rel_error) {
   HOC_CHECK(mesh && max_rel_error, HOC_ERR_ARGUMENT, "NULL argument");
   HOC_CHECK(samples > 0, HOC_ERR_ARGUMENT, "need at least one sample");
-  opt ctx;
+  opt ctx = {0};
   scratch *scr = NULL;
   hoc_status status = setup(&ctx, mesh, measure, fix_curves);
   if (status == HOC_OK) status = eval_all(&ctx);

@@ -89,9 +89,12 @@ double hoc_distortion_point(hoc_measure measure, const double a1[3], const doubl
 /* Measuring: every point of the element (quadrature, nodes, lattice) in
  * vectors of 2 doubles (SSE2, any x86-64) or 4 (AVX2, picked at run time),
  * with GCC/clang vector extensions. The same operations in the same order
- * at both widths, so the same results; and the same arithmetic as
- * hoc_distortion_point with delta = 0: sigma = gamma |a1 x a2|, gamma = +1
- * where (a1 x a2) . n > 0, else -1. */
+ * at both widths, so the same results. At each point the same arithmetic
+ * as hoc_distortion_point with delta = 0 (sigma = gamma |a1 x a2|, gamma =
+ * +1 where (a1 x a2) . n > 0, else -1); the weighted sum of eta^2 is
+ * accumulated per lane (point k in lane k mod HOC_QB) and the lanes added
+ * last, an order other than the points' own: q may differ from a
+ * point-by-point sum in its last bits. */
 typedef double v2d __attribute__((vector_size(2 * sizeof(double))));
 typedef long long v2l __attribute__((vector_size(2 * sizeof(long long))));
 typedef double v2d_u __attribute__((vector_size(2 * sizeof(double)), aligned(8), may_alias));

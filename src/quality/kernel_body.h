@@ -53,11 +53,13 @@ KATTR static void KNAME(const hoc_quality_tables *t, int oddy, const double *x, 
       KV e;
       if (oddy) {
         KV g12 = a10 * a20 + a11 * a21 + a12 * a22;
-        e = KSPLAT(1.5) * (g11 * g11 + 2 * g12 * g12 + g22 * g22 - F * F / 3) / (sig * sig);
+        e = KSPLAT(1.5) * (g11 * g11 + 2 * g12 * g12 + g22 * g22 - F * F / 3) * (1 / (sig * sig));
       } else {
         e = F / (2 * sig);
       }
-      sum += KLOAD(t->Bw + (size_t)b * HOC_QB + (size_t)h) * e * e;
+      /* only where the weight is not 0: elsewhere eta may be infinite */
+      KV w = KLOAD(t->Bw + (size_t)b * HOC_QB + (size_t)h);
+      sum += (KV)((KL)(w * e * e) & (w != KSPLAT(0)));
     }
     memcpy(sum_out + h, &sum, sizeof sum);
     memcpy(smin_out + h, &smin, sizeof smin);
