@@ -161,7 +161,8 @@ static hoc_status reinterpolate(const hoc_mesh *in, int p, hoc_nodeset set, hoc_
   HOC_ALLOC_GOTO(conn, ne * (size_t)np, done);
   HOC_ALLOC_GOTO(edge_first, 3 * ne, done);
   HOC_ALLOC_GOTO(edge_a, 3 * ne, done);
-  for (size_t i = 0; i < in->n_nodes; ++i) vmap[i] = SIZE_MAX;
+  for (size_t i = 0; i < in->n_nodes; ++i)
+    vmap[i] = SIZE_MAX;
   HOC_ALLOC_GOTO(elem_edge, 3 * ne, done);
   HOC_ALLOC_GOTO(edge_new, 3 * ne, done);
   HOC_TRY_GOTO(edge_table_build(&edges, in->conn, ne, npi, in->n_nodes, elem_edge, edge_new), done);

@@ -170,16 +170,19 @@ hoc_status hoc_mesh_element_cusp(const hoc_mesh *mesh, size_t e, double max_angl
     size_t v = cn[k];
     if (mesh->dim[v] != HOC_ON_VERTEX) continue;
     double t[2], d[2][3];
-    int c[2] = {edge_curve(mesh, e, k, (k + 1) % 3, &t[0]), edge_curve(mesh, e, k, (k + 2) % 3, &t[1])};
+    int c[2] = {edge_curve(mesh, e, k, (k + 1) % 3, &t[0]),
+                edge_curve(mesh, e, k, (k + 2) % 3, &t[1])};
     if (c[0] < 0 || c[1] < 0) continue;
-    for (int j = 0; j < 2; ++j) HOC_TRY(curve_tangent_at(mesh->model, c[j], mesh->entity[v], t[j], d[j]));
+    for (int j = 0; j < 2; ++j)
+      HOC_TRY(curve_tangent_at(mesh->model, c[j], mesh->entity[v], t[j], d[j]));
     double dot = d[0][0] * d[1][0] + d[0][1] * d[1][1] + d[0][2] * d[1][2];
     double angle = acos(dot > 1 ? 1 : dot < -1 ? -1 : dot) * (180 / 3.14159265358979323846);
     if (angle < best) {
       best = angle;
       *found = 1;
       cusp->vertex_tag = mesh->model->vertices[mesh->entity[v]].tag;
-      for (int j = 0; j < 2; ++j) cusp->curve_tags[j] = mesh->model->curves[c[j]].tag;
+      for (int j = 0; j < 2; ++j)
+        cusp->curve_tags[j] = mesh->model->curves[c[j]].tag;
       cusp->angle_degrees = angle;
     }
   }

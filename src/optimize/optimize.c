@@ -831,8 +831,8 @@ static hoc_status eval_trial(opt *o, size_t i) {
  * node twice), on nthreads threads. */
 static hoc_status eval_trials(opt *o, const size_t *list, size_t n, int nthreads) {
   hoc_par_error err = {0};
-#pragma omp parallel for schedule(dynamic, 16) num_threads(nthreads) \
-    if (n > 64 && o->model->thread_safe)
+#pragma omp parallel for schedule(dynamic, 16)                                                     \
+    num_threads(nthreads) if (n > 64 && o->model->thread_safe)
   for (size_t c = 0; c < n; ++c)
     hoc_par_error_catch(&err, eval_trial(o, list[c]));
   return hoc_par_error_raise(&err);
