@@ -35,6 +35,13 @@ ok "optimize untangles" "grep -q '\"name\": \"optimized\".*\"tangled\": 0,' fix.
 # order above 10: VTU only
 "$hocad" mesh "$src/examples/models/screw.step" --order 12 --no-optimize --vtu s12.vtu --no-output > /dev/null 2>&1
 ok "order 12 to vtu" "[ $? -eq 0 ] && [ -s s12.vtu ]"
+# stopped by --max-iterations with tangled elements left: exit 5 and the
+# limit named as the reason (order 5 of t20 keeps 10 tangled after 1 sweep)
+"$hocad" mesh "$model" --order 5 --max-iterations 1 --no-output -q > /dev/null 2> lim.txt
+code=$?
+ok "tangled at the iteration limit exits 5" "[ $code -eq 5 ]"
+ok "the limit is named" "grep -q 'still tangled after 1 iteration(s) (the limit: raise --max-iterations)' lim.txt"
+ok "no cusp note before convergence" "! grep -q 'cusp' lim.txt"
 # no temporary files left behind
 ok "no temporaries" "[ -z \"\$(ls -A | grep tmp- || true)\" ]"
 echo "$pass passed, $fail failed"

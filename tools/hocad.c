@@ -408,6 +408,7 @@ typedef struct stage {
   double seconds; /* to produce the stage */
   int optimized;  /* the fields below are set */
   int iterations, converged;
+  int stopped_at_limit; /* the optimiser ran out of iterations */
   double objective_initial, objective;
 } stage;
 
@@ -599,17 +600,29 @@ static int optimize_stage(const options *o, report *r, hoc_mesh *mesh) {
   s->optimized = 1;
   s->iterations = res.iterations;
   s->converged = res.converged;
+  s->stopped_at_limit = res.iterations >= oo.max_iterations;
   s->objective_initial = res.objective_initial;
   s->objective = res.objective_final;
   return EXIT_OK;
 }
 
 /* Where tangled elements remain: say which (on stderr). */
-static void report_tangled(const hoc_mesh *mesh, const double *q, int optimized) {
+/* The optimised stage of a report, or NULL. */
+static const stage *optimized_stage(const report *r) {
+  for (int i = 0; i < r->n; ++i)
+    if (r->stages[i].optimized) return &r->stages[i];
+  return NULL;
+}
+
+/* `opt` is the optimised stage, or NULL if the mesh was not optimised. */
+static void report_tangled(const hoc_mesh *mesh, const double *q, const stage *opt) {
   size_t ne = hoc_mesh_num_elements(mesh), shown = 0, total = 0;
   for (size_t e = 0; e < ne; ++e) total += q[e] == 0.0;
   if (!total) return;
-  if (optimized)
+  if (opt && !opt->converged && opt->stopped_at_limit)
+    fprintf(stderr, "%s: warning: %zu element(s) still tangled after %d iteration(s) (the limit: "
+                    "raise --max-iterations):", program, total, opt->iterations);
+  else if (opt)
     fprintf(stderr, "%s: warning: %zu element(s) could not be untangled with this linear mesh "
                     "(try a smaller --size or a larger --curvature):", program, total);
   else
@@ -630,6 +643,8 @@ static void report_cusps(const report *r, const hoc_mesh *mesh, const double *q)
   size_t ne = hoc_mesh_num_elements(mesh), low = 0, at_cusp = 0;
   char list[512] = "";
   size_t len = 0;
+  const stage *opt = optimized_stage(r);
+  if (!opt || !opt->converged) return; /* a low q may still be the optimiser's */
   if (r->n < 2 || !(r->stages[r->n - 1].stats.min < bound)) return; /* none below */
   for (size_t e = 0; e < ne; ++e) {
     if (q[e] == 0.0 || (q[e] >= bound && q[e] >= rest)) continue; /* changes nothing below */
@@ -845,7 +860,7 @@ static int cmd_mesh(int argc, char **argv) {
     int n = o.order == 1 ? 1 : raised ? 3 : 2;
     if ((code = write_pictures(&o, n, stages, final, q))) goto done;
   }
-  report_tangled(final, q, o.optimize && o.order > 1);
+  report_tangled(final, q, optimized_stage(&r));
   if (o.optimize && o.order > 1) report_cusps(&r, final, q);
   if (r.stages[r.n - 1].stats.tangled) code = EXIT_TANGLED;
   if (!code && hoc_mesh_num_failed_faces(lin)) code = EXIT_PARTIAL;
@@ -965,7 +980,7 @@ static int cmd_optimize(int argc, char **argv) {
   if ((code = write_outputs(&o, mesh, q, o.out))) goto done;
   r.nodes = hoc_mesh_num_nodes(mesh);
   if (o.json && (code = write_json(o.json, &o, &r, "optimize"))) goto done;
-  report_tangled(mesh, q, 1);
+  report_tangled(mesh, q, optimized_stage(&r));
   if (r.stages[r.n - 1].stats.tangled) code = EXIT_TANGLED;
 done:
   free(q);
