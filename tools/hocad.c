@@ -620,8 +620,10 @@ static void report_tangled(const hoc_mesh *mesh, const double *q, const stage *o
   for (size_t e = 0; e < ne; ++e) total += q[e] == 0.0;
   if (!total) return;
   if (opt && !opt->converged && opt->stopped_at_limit)
-    fprintf(stderr, "%s: warning: %zu element(s) still tangled after %d iteration(s) (the limit: "
-                    "raise --max-iterations):", program, total, opt->iterations);
+    fprintf(stderr,
+            "%s: warning: %zu element(s) still tangled after %d iteration(s) (the limit: "
+            "raise --max-iterations):",
+            program, total, opt->iterations);
   else if (opt)
     fprintf(stderr, "%s: warning: %zu element(s) could not be untangled with this linear mesh "
                     "(try a smaller --size or a larger --curvature):", program, total);
