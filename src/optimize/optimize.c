@@ -1391,6 +1391,52 @@ static void scratch_free(scratch *s, int nthreads) {
   free(s);
 }
 
+/* The mesh state the optimiser changes (node parameters and positions, slot
+ * and element parameters, line ends), kept while untangling so that a run
+ * that ends with more tangled elements than it once had returns the best
+ * state reached: a raised regularisation lets valid neighbours of a fold
+ * pass through sigma = 0, which does not always pay off. */
+typedef struct snapshot {
+  double *param, *xyz, *slot_uv, *elem_uv, *line_t;
+  size_t tangled; /* SIZE_MAX: none taken */
+  double objective;
+} snapshot;
+
+static void snapshot_free(snapshot *s) {
+  free(s->param);
+  free(s->xyz);
+  free(s->slot_uv);
+  free(s->elem_uv);
+  free(s->line_t);
+}
+
+/* Copy src of n doubles into *dst (allocated on first use). */
+static hoc_status keep(double **dst, const double *src, size_t n) {
+  if (!*dst) *dst = hoc_realloc(NULL, n + 1, sizeof **dst);
+  HOC_CHECK(*dst, HOC_ERR_MEMORY, "out of memory for the best mesh reached");
+  memcpy(*dst, src, n * sizeof **dst);
+  return HOC_OK;
+}
+
+static hoc_status snapshot_take(snapshot *s, const hoc_mesh *m, size_t tangled, double f) {
+  HOC_TRY(keep(&s->param, m->param, 2 * m->n_nodes));
+  HOC_TRY(keep(&s->xyz, m->xyz, 3 * m->n_nodes));
+  HOC_TRY(keep(&s->slot_uv, m->slot_uv, 2 * m->n_slots));
+  HOC_TRY(keep(&s->elem_uv, m->elem_uv, 2 * m->n_elems * (size_t)m->np));
+  HOC_TRY(keep(&s->line_t, m->line_t, 2 * m->n_lines));
+  s->tangled = tangled;
+  s->objective = f;
+  return HOC_OK;
+}
+
+static void snapshot_restore(const snapshot *s, hoc_mesh *m) {
+  memcpy(m->param, s->param, 2 * m->n_nodes * sizeof *s->param);
+  memcpy(m->xyz, s->xyz, 3 * m->n_nodes * sizeof *s->xyz);
+  memcpy(m->slot_uv, s->slot_uv, 2 * m->n_slots * sizeof *s->slot_uv);
+  memcpy(m->elem_uv, s->elem_uv, 2 * m->n_elems * (size_t)m->np * sizeof *s->elem_uv);
+  memcpy(m->line_t, s->line_t, 2 * m->n_lines * sizeof *s->line_t);
+}
+
 hoc_status hoc_mesh_optimize(hoc_mesh *mesh, const hoc_optimize_options *options,
                              hoc_optimize_result *result) {
   HOC_CHECK(mesh, HOC_ERR_ARGUMENT, "no mesh given");
@@ -1420,6 +1466,8 @@ hoc_status hoc_mesh_optimize(hoc_mesh *mesh, const hoc_optimize_options *options
     return status;
   }
   hoc_optimize_result res = {0};
+  snapshot best = {0};
+  best.tangled = SIZE_MAX;
   for (size_t i = 0; i < mesh->n_nodes; ++i) {
     ctx.active[i] = ctx.ndof[i] > 0;
     res.free_nodes += ctx.ndof[i] > 0;
@@ -1430,6 +1478,7 @@ hoc_status hoc_mesh_optimize(hoc_mesh *mesh, const hoc_optimize_options *options
   HOC_TRY_GOTO(sweep_start(&ctx, &f, &qmin, &tangled), done);
   res.objective_initial = f;
   res.tangled_initial = tangled;
+  if (tangled) HOC_TRY_GOTO(snapshot_take(&best, mesh, tangled, f), done);
   int stalled = 0;
   double hist_f[11], hist_q[11];
   for (int it = 1; it <= o.max_iterations; ++it) {
@@ -1474,6 +1523,7 @@ hoc_status hoc_mesh_optimize(hoc_mesh *mesh, const hoc_optimize_options *options
     size_t tangled_before = tangled;
     HOC_TRY_GOTO(sweep_start(&ctx, &f, &qmin, &tangled), done);
     res.iterations = it;
+    if (tangled && tangled < best.tangled) HOC_TRY_GOTO(snapshot_take(&best, mesh, tangled, f), done);
     /* untangling that stalls: a smoother regularised landscape (larger
      * delta) for a while; back to the small one as soon as it moves on */
     if (tangled && tangled >= tangled_before) {
@@ -1516,7 +1566,13 @@ hoc_status hoc_mesh_optimize(hoc_mesh *mesh, const hoc_optimize_options *options
       break;
     }
   }
+  if (best.tangled != SIZE_MAX && tangled > best.tangled) {
+    snapshot_restore(&best, mesh); /* more tangled than once: the best state reached */
+    f = best.objective;
+    tangled = best.tangled;
+  }
 done:
+  snapshot_free(&best);
   res.objective_final = f;
   res.tangled_final = tangled;
   res.seconds = now() - t0;
