@@ -1523,7 +1523,8 @@ hoc_status hoc_mesh_optimize(hoc_mesh *mesh, const hoc_optimize_options *options
     size_t tangled_before = tangled;
     HOC_TRY_GOTO(sweep_start(&ctx, &f, &qmin, &tangled), done);
     res.iterations = it;
-    if (tangled && tangled < best.tangled) HOC_TRY_GOTO(snapshot_take(&best, mesh, tangled, f), done);
+    if (tangled && tangled < best.tangled)
+      HOC_TRY_GOTO(snapshot_take(&best, mesh, tangled, f), done);
     /* untangling that stalls: a smoother regularised landscape (larger
      * delta) for a while; back to the small one as soon as it moves on */
     if (tangled && tangled >= tangled_before) {
