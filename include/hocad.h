@@ -271,9 +271,12 @@ typedef struct hoc_optimize_result {
  *  element is tangled. Face-interior nodes move in their face's (u, v),
  *  nodes on CAD curves slide along the curve in t (unless fix_curves), CAD
  *  vertices are fixed; every position is evaluated on the CAD. A step never
- *  tangles a valid element and never leaves a face's parametric domain.
+ *  leaves a face's parametric domain and never tangles a valid element,
+ *  except next to a fold while untangling stalls (docs/quality.md).
  *  Deterministic, whatever the thread count.
- *  @param[in,out] mesh  the mesh, changed in place (the best state reached)
+ *  @param[in,out] mesh  the mesh, changed in place: the final state, or, if
+ *                       that has more tangled elements than an earlier one,
+ *                       the earlier state with the fewest
  *  @param[in] options   NULL for defaults
  *  @param[out] result   may be NULL */
 hoc_status hoc_mesh_optimize(hoc_mesh *mesh, const hoc_optimize_options *options,
