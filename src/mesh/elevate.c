@@ -3,10 +3,10 @@
  * placed in the curve's parameter, then mapped onto the CAD.
  * SPDX-License-Identifier: GPL-2.0-or-later */
 #include "basis/basis.h"
-#include "core/hash.h"
 #include "mesh/mesh.h"
 
 #include <math.h>
+#include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -141,7 +141,7 @@ static hoc_status reinterpolate(const hoc_mesh *in, int p, hoc_nodeset set, hoc_
   int *lcurve = NULL;
   hoc_lagrange *basis = NULL;
   builder b = {0};
-  hoc_hash lines = {0};
+  size_t *edge_line = NULL;
   hoc_status status = HOC_OK;
   HOC_ALLOC_GOTO(rs, 2 * (size_t)np, done);
   HOC_ALLOC_GOTO(s, (size_t)p + 1, done);
@@ -170,10 +170,14 @@ static hoc_status reinterpolate(const hoc_mesh *in, int p, hoc_nodeset set, hoc_
   HOC_TRY_GOTO(builder_reserve(&b, in->n_nodes + edges.n_edges * (size_t)(p - 1) +
                                        ne * (size_t)(np - 3 * p)),
                done);
-  HOC_TRY_GOTO(hoc_hash_init(&lines, in->n_lines), done);
+  /* the source line (CAD curve edge) on each edge, the first if several */
+  HOC_ALLOC_GOTO(edge_line, edges.n_edges + 1, done);
+  for (size_t id = 0; id < edges.n_edges; ++id)
+    edge_line[id] = SIZE_MAX;
   for (size_t l = 0; l < in->n_lines; ++l) {
     const size_t *ln = in->line_conn + l * (size_t)(pin + 1);
-    HOC_TRY_GOTO(hoc_hash_insert(&lines, hoc_pair_key(ln[0], ln[1]), l, NULL, NULL), done);
+    size_t x = edge_entry(&edges, ln[0], ln[1]);
+    if (x != SIZE_MAX && edge_line[edges.id[x]] == SIZE_MAX) edge_line[edges.id[x]] = l;
   }
   /* vertices keep their classification and parameters */
   for (size_t e = 0; e < ne; ++e)
@@ -194,7 +198,7 @@ static hoc_status reinterpolate(const hoc_mesh *in, int p, hoc_nodeset set, hoc_
     size_t *out_cn = conn + e * (size_t)np;
     for (int k = 0; k < 3 && p > 1; ++k) {
       int ka = k, kb = (k + 1) % 3;
-      size_t a = cn[ka], bb = cn[kb], id = elem_edge[3 * e + (size_t)k];
+      size_t a = cn[ka], id = elem_edge[3 * e + (size_t)k];
       size_t *dst = out_cn + 3 + (size_t)k * (p - 1);
       if (!edge_new[3 * e + (size_t)k]) {
         /* created by a neighbour: same nodes, walked in its direction or back */
@@ -210,7 +214,7 @@ static hoc_status reinterpolate(const hoc_mesh *in, int p, hoc_nodeset set, hoc_
       loc[0] = ka;
       loc[pin] = kb;
       for (int j = 0; j < pin - 1; ++j) loc[1 + j] = 3 + k * (pin - 1) + j;
-      size_t l = hoc_hash_get(&lines, hoc_pair_key(a, bb));
+      size_t l = edge_line[id];
       if (l != SIZE_MAX) {
         /* on a CAD curve: interpolate t along the edge */
         int c = in->line_curve[l];
@@ -345,7 +349,7 @@ done:
   edge_table_free(&edges);
   free(elem_edge);
   free(edge_new);
-  hoc_hash_free(&lines);
+  free(edge_line);
   return status;
 }
 
