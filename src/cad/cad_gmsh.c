@@ -34,8 +34,19 @@ static int gmsh_initialized;
 static int gmsh_model_in_use;
 static pthread_mutex_t gmsh_lock = PTHREAD_MUTEX_INITIALIZER;
 
+/* The calls held are short (a reparametrisation costs about 2 us): a
+ * waiting thread first spins a while, as a thread put to sleep on the
+ * mutex takes longer to wake (a virtual machine's wake-up interrupt) than
+ * the holder takes to finish. */
 static void serial_begin(int needed) {
-  if (needed) pthread_mutex_lock(&gmsh_lock);
+  if (!needed) return;
+  for (int i = 0; i < 2000; ++i) {
+    if (pthread_mutex_trylock(&gmsh_lock) == 0) return;
+#if defined(__x86_64__) || defined(__i386__)
+    __builtin_ia32_pause();
+#endif
+  }
+  pthread_mutex_lock(&gmsh_lock);
 }
 static void serial_end(int needed) {
   if (needed) pthread_mutex_unlock(&gmsh_lock);

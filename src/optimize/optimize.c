@@ -227,13 +227,13 @@ static hoc_status grow_push(growlist *g, size_t x) {
 /* Blocks of family 0: vertices, edges, element interiors; of family 1:
  * single nodes. Their nodes, footprints, unknowns and carried nodes. */
 static hoc_status build_blocks(opt *o, int family) {
-  o->B = &o->fam[family];
+  blockset *B = &o->fam[family];
   hoc_mesh *m = o->m;
   size_t nn = m->n_nodes, ne = m->n_elems, np = (size_t)o->np;
   int p = m->order;
-  HOC_ALLOC(o->B->node_block, nn);
-  HOC_ALLOC(o->B->node_off, nn);
-  for (size_t i = 0; i < nn; ++i) o->B->node_block[i] = SIZE_MAX;
+  HOC_ALLOC(B->node_block, nn);
+  HOC_ALLOC(B->node_off, nn);
+  for (size_t i = 0; i < nn; ++i) B->node_block[i] = SIZE_MAX;
   growlist start = {0}, nodes = {0};
   hoc_status status = HOC_OK;
   /* vertex blocks first, then edge blocks, then interior blocks */
@@ -244,8 +244,8 @@ static hoc_status build_blocks(opt *o, int family) {
         const size_t *cn = m->conn + e * np;
         for (size_t k = 0; k < np; ++k) {
           size_t i = cn[k];
-          if (!o->ndof[i] || o->B->node_block[i] != SIZE_MAX) continue;
-          o->B->node_block[i] = start.n;
+          if (!o->ndof[i] || B->node_block[i] != SIZE_MAX) continue;
+          B->node_block[i] = start.n;
           HOC_TRY_GOTO(grow_push(&start, nodes.n), done);
           HOC_TRY_GOTO(grow_push(&nodes, i), done);
         }
@@ -255,8 +255,8 @@ static hoc_status build_blocks(opt *o, int family) {
       if (kind == 0) {
         for (int k = 0; k < 3; ++k) {
           size_t i = cn[k];
-          if (!o->ndof[i] || o->B->node_block[i] != SIZE_MAX) continue;
-          o->B->node_block[i] = start.n;
+          if (!o->ndof[i] || B->node_block[i] != SIZE_MAX) continue;
+          B->node_block[i] = start.n;
           HOC_TRY_GOTO(grow_push(&start, nodes.n), done);
           HOC_TRY_GOTO(grow_push(&nodes, i), done);
         }
@@ -266,9 +266,9 @@ static hoc_status build_blocks(opt *o, int family) {
           size_t first = nodes.n;
           for (int j = 0; j < p - 1; ++j) {
             size_t i = cn[3 + k * (p - 1) + j];
-            if (!o->ndof[i] || o->B->node_block[i] != SIZE_MAX) continue;
+            if (!o->ndof[i] || B->node_block[i] != SIZE_MAX) continue;
             if (nodes.n == first) HOC_TRY_GOTO(grow_push(&start, nodes.n), done);
-            o->B->node_block[i] = start.n - 1;
+            B->node_block[i] = start.n - 1;
             HOC_TRY_GOTO(grow_push(&nodes, i), done);
           }
         }
@@ -276,41 +276,41 @@ static hoc_status build_blocks(opt *o, int family) {
         size_t first = nodes.n;
         for (size_t k = 3 * (size_t)p; k < np; ++k) {
           size_t i = cn[k];
-          if (!o->ndof[i] || o->B->node_block[i] != SIZE_MAX) continue;
+          if (!o->ndof[i] || B->node_block[i] != SIZE_MAX) continue;
           if (nodes.n == first) HOC_TRY_GOTO(grow_push(&start, nodes.n), done);
-          o->B->node_block[i] = start.n - 1;
+          B->node_block[i] = start.n - 1;
           HOC_TRY_GOTO(grow_push(&nodes, i), done);
         }
       }
     }
   size_t nb = start.n;
-  o->B->n_blocks = nb;
+  B->n_blocks = nb;
   HOC_TRY_GOTO(grow_push(&start, nodes.n), done);
-  o->B->bn_start = start.v;
-  o->B->bn_node = nodes.v;
+  B->bn_start = start.v;
+  B->bn_node = nodes.v;
   start.v = nodes.v = NULL;
   /* unknowns */
-  o->B->bd_start = hoc_calloc(nb + 1, sizeof *o->B->bd_start);
-  if (!o->B->bd_start) {
+  B->bd_start = hoc_calloc(nb + 1, sizeof *B->bd_start);
+  if (!B->bd_start) {
     status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
     goto done;
   }
   for (size_t b = 0; b < nb; ++b) {
     int off = 0;
-    for (size_t a = o->B->bn_start[b]; a < o->B->bn_start[b + 1]; ++a) {
-      o->B->node_off[o->B->bn_node[a]] = off;
-      off += o->ndof[o->B->bn_node[a]];
+    for (size_t a = B->bn_start[b]; a < B->bn_start[b + 1]; ++a) {
+      B->node_off[B->bn_node[a]] = off;
+      off += o->ndof[B->bn_node[a]];
     }
-    o->B->bd_start[b + 1] = o->B->bd_start[b] + (size_t)off;
-    if (off > o->max_nd) o->max_nd = off;
+    B->bd_start[b + 1] = B->bd_start[b] + (size_t)off;
+    if (off > B->max_nd) B->max_nd = off;
   }
   /* footprints: the elements of the block's nodes */
   {
     growlist fs = {0}, fe = {0};
     for (size_t b = 0; b < nb && status == HOC_OK; ++b) {
       status = grow_push(&fs, fe.n);
-      for (size_t a = o->B->bn_start[b]; a < o->B->bn_start[b + 1] && status == HOC_OK; ++a) {
-        size_t i = o->B->bn_node[a];
+      for (size_t a = B->bn_start[b]; a < B->bn_start[b + 1] && status == HOC_OK; ++a) {
+        size_t i = B->bn_node[a];
         for (size_t c = o->ne_start[i]; c < o->ne_start[i + 1] && status == HOC_OK; ++c) {
           size_t e = o->ne_elem[c];
           int seen = 0;
@@ -320,21 +320,22 @@ static hoc_status build_blocks(opt *o, int family) {
       }
     }
     if (status == HOC_OK) status = grow_push(&fs, fe.n);
-    o->B->be_start = fs.v;
-    o->B->be_elem = fe.v;
+    B->be_start = fs.v;
+    B->be_elem = fe.v;
     if (status != HOC_OK) goto done;
   }
   /* carried nodes of face-interior vertex blocks */
   {
     growlist cs = {0}, cn = {0};
-    growlist cw = {0}; /* weights stored as bit patterns of doubles would be opaque: separate array */
-    (void)cw;
     double *w = NULL;
     size_t wcap = 0;
+    size_t *last = malloc((nn + 1) * sizeof *last); /* block that last took the node */
+    if (!last) status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
+    else memset(last, 0xff, (nn + 1) * sizeof *last);
     for (size_t b = 0; b < nb && status == HOC_OK; ++b) {
       status = grow_push(&cs, cn.n);
-      size_t k = o->B->bn_node[o->B->bn_start[b]];
-      int vertex = family == 0 && o->B->bn_start[b + 1] - o->B->bn_start[b] == 1 && p >= 2 &&
+      size_t k = B->bn_node[B->bn_start[b]];
+      int vertex = family == 0 && B->bn_start[b + 1] - B->bn_start[b] == 1 && p >= 2 &&
                    o->ndof[k] == 2;
       for (size_t a = o->ne_start[k]; a < o->ne_start[k + 1] && vertex; ++a) vertex = o->ne_local[a] < 3;
       if (!vertex) continue;
@@ -343,13 +344,11 @@ static hoc_status build_blocks(opt *o, int family) {
         int kk = o->ne_local[a];
         for (size_t i = 3; i < np && status == HOC_OK; ++i) {
           size_t node = m->conn[e * np + i];
-          if (o->ndof[node] != 2 || m->entity[node] != m->entity[k]) continue;
+          if (o->ndof[node] != 2 || m->entity[node] != m->entity[k] || last[node] == b) continue;
           double r = o->t->rs[2 * i], s = o->t->rs[2 * i + 1];
           double lam = kk == 0 ? 1 - r - s : kk == 1 ? r : s;
           if (!(lam > 1e-12)) continue;
-          int seen = 0;
-          for (size_t j = cs.v[b]; j < cn.n && !seen; ++j) seen = cn.v[j] == node;
-          if (seen) continue;
+          last[node] = b;
           status = grow_push(&cn, node);
           if (status != HOC_OK) break;
           if (cn.n > wcap) {
@@ -365,10 +364,11 @@ static hoc_status build_blocks(opt *o, int family) {
         }
       }
     }
+    free(last);
     if (status == HOC_OK) status = grow_push(&cs, cn.n);
-    o->B->carry_start = cs.v;
-    o->B->carry_node = cn.v;
-    o->B->carry_w = w;
+    B->carry_start = cs.v;
+    B->carry_node = cn.v;
+    B->carry_w = w;
     if (status != HOC_OK) goto done;
   }
   /* colours: blocks touching a common element differ; every element's
@@ -385,10 +385,10 @@ static hoc_status build_blocks(opt *o, int family) {
     }
     for (size_t b = 0; b < nb; ++b) color[b] = -1;
     for (size_t b = 0; b < nb && status == HOC_OK; ++b) {
-      for (size_t a = o->B->be_start[b]; a < o->B->be_start[b + 1]; ++a) {
-        const size_t *cn = m->conn + o->B->be_elem[a] * np;
+      for (size_t a = B->be_start[b]; a < B->be_start[b + 1]; ++a) {
+        const size_t *cn = m->conn + B->be_elem[a] * np;
         for (size_t k = 0; k < np; ++k) {
-          size_t b2 = o->B->node_block[cn[k]];
+          size_t b2 = B->node_block[cn[k]];
           if (b2 != SIZE_MAX && color[b2] >= 0) stamp[color[b2]] = b + 1;
         }
       }
@@ -407,26 +407,26 @@ static hoc_status build_blocks(opt *o, int family) {
       color[b] = c;
       if (c + 1 > max_colors) max_colors = c + 1;
     }
-    o->B->n_colors = max_colors;
-    if (status == HOC_OK) status = csr_alloc((size_t)max_colors, nb, &o->B->color_start, &o->B->color_block);
+    B->n_colors = max_colors;
+    if (status == HOC_OK) status = csr_alloc((size_t)max_colors, nb, &B->color_start, &B->color_block);
     if (status == HOC_OK) {
-      for (size_t b = 0; b < nb; ++b) o->B->color_start[color[b] + 1]++;
-      csr_finish_counts((size_t)max_colors, o->B->color_start);
-      for (size_t b = 0; b < nb; ++b) o->B->color_block[o->B->color_start[color[b]]++] = b;
-      csr_restore((size_t)max_colors, o->B->color_start);
+      for (size_t b = 0; b < nb; ++b) B->color_start[color[b] + 1]++;
+      csr_finish_counts((size_t)max_colors, B->color_start);
+      for (size_t b = 0; b < nb; ++b) B->color_block[B->color_start[color[b]]++] = b;
+      csr_restore((size_t)max_colors, B->color_start);
     }
     if (status == HOC_OK) {
-      o->B->block_color = color;
+      B->block_color = color;
       color = NULL;
-      o->B->queue_head = hoc_calloc((size_t)max_colors + 1, sizeof *o->B->queue_head);
-      o->B->queue_next = hoc_calloc(nb + 1, sizeof *o->B->queue_next);
-      o->B->queued = hoc_calloc(nb + 1, 1);
-      o->B->scan_all = hoc_calloc((size_t)max_colors + 1, 1);
-      if (!o->B->queue_head || !o->B->queue_next || !o->B->queued || !o->B->scan_all)
+      B->queue_head = hoc_calloc((size_t)max_colors + 1, sizeof *B->queue_head);
+      B->queue_next = hoc_calloc(nb + 1, sizeof *B->queue_next);
+      B->queued = hoc_calloc(nb + 1, 1);
+      B->scan_all = hoc_calloc((size_t)max_colors + 1, 1);
+      if (!B->queue_head || !B->queue_next || !B->queued || !B->scan_all)
         status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
       for (int c = 0; c < max_colors && status == HOC_OK; ++c) {
-        o->B->queue_head[c] = SIZE_MAX;
-        o->B->scan_all[c] = 1;
+        B->queue_head[c] = SIZE_MAX;
+        B->scan_all[c] = 1;
       }
     }
     free(color);
@@ -480,8 +480,13 @@ static hoc_status setup(opt *o, hoc_mesh *m, hoc_measure measure, int fix_curves
     else if (m->dim[i] == HOC_ON_CURVE && !fix_curves && !m->model->curves[m->entity[i]].degenerate)
       o->ndof[i] = 1;
   }
-  HOC_TRY(build_blocks(o, 1));
-  HOC_TRY(build_blocks(o, 0)); /* family 0 is current by default */
+  /* the two families at once (each fills only its own blockset) */
+  hoc_par_error err = {0};
+#pragma omp parallel for schedule(static, 1) num_threads(2) if (omp_get_max_threads() > 1)
+  for (int family = 0; family < 2; ++family) hoc_par_error_catch(&err, build_blocks(o, family));
+  HOC_TRY(hoc_par_error_raise(&err));
+  o->B = &o->fam[0]; /* family 0 is current by default */
+  o->max_nd = o->fam[0].max_nd > o->fam[1].max_nd ? o->fam[0].max_nd : o->fam[1].max_nd;
   size_t nb = o->fam[0].n_blocks > o->fam[1].n_blocks ? o->fam[0].n_blocks : o->fam[1].n_blocks;
   size_t nd_total = o->fam[0].bd_start[o->fam[0].n_blocks] > o->fam[1].bd_start[o->fam[1].n_blocks]
                         ? o->fam[0].bd_start[o->fam[0].n_blocks]
@@ -831,8 +836,7 @@ static hoc_status eval_trial(opt *o, size_t i) {
  * node twice), on nthreads threads. */
 static hoc_status eval_trials(opt *o, const size_t *list, size_t n, int nthreads) {
   hoc_par_error err = {0};
-#pragma omp parallel for schedule(dynamic, 16)                                                     \
-    num_threads(nthreads) if (n > 64 && o->model->thread_safe)
+#pragma omp parallel for schedule(dynamic, 4) num_threads(nthreads) if (n > 8 && o->model->thread_safe)
   for (size_t c = 0; c < n; ++c)
     hoc_par_error_catch(&err, eval_trial(o, list[c]));
   return hoc_par_error_raise(&err);
@@ -884,8 +888,6 @@ static void commit(opt *o, size_t k) {
   memcpy(o->dz + 6 * k, o->tdz + 6 * k, 6 * sizeof(double));
 }
 
-/* Sorting the trial list by (dim, entity) with a global context: qsort has
- * none in C11, so a small insertion-friendly merge sort instead. */
 /* Blocks ------------------------------------------------------------------- */
 
 static double carry_weight(const opt *o, size_t b, size_t node) {
@@ -908,7 +910,7 @@ static void set_moving(opt *o, size_t b, unsigned char v) {
 static hoc_status screen(opt *o) {
   hoc_mesh *m = o->m;
   size_t ne = m->n_elems, np = (size_t)o->np;
-  double *contrib = hoc_calloc(5 * ne * np + 1, sizeof *contrib); /* [ne][np][g0 g1 h00 h01 h11] */
+  double *contrib = malloc((5 * ne * np + 1) * sizeof *contrib); /* [ne][np][g0 g1 h00 h01 h11] */
   HOC_CHECK(contrib, HOC_ERR_MEMORY, "out of memory");
   int nr_max = o->nq + o->np + o->t->nv, failed = 0;
 #pragma omp parallel
@@ -927,7 +929,7 @@ static hoc_status screen(opt *o) {
       const size_t *cn = m->conn + e * np;
       for (size_t i = 0; i < np; ++i) {
         const double *dz = o->dz + 6 * cn[i];
-        double *c = contrib + 5 * (e * np + i);
+        double c[5] = {0, 0, 0, 0, 0};
         for (int q = 0; q < nr; ++q) {
           const double *j = J + 3 * ((size_t)q * np + i);
           double z0 = j[0] * dz[0] + j[1] * dz[1] + j[2] * dz[2];
@@ -938,6 +940,10 @@ static hoc_status screen(opt *o) {
           c[3] += 2 * z0 * z1;
           c[4] += 2 * z1 * z1;
         }
+        /* written once, never read first: a fresh page read before it is
+         * written is copied from the zero page, and with two threads every
+         * such copy flushes the other core's TLB */
+        memcpy(contrib + 5 * (e * np + i), c, sizeof c);
       }
     }
     free(x);
