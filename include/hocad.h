@@ -261,6 +261,9 @@ typedef struct hoc_optimize_result {
   int converged;        /**< a stopping rule of `tolerance` met, no tangled element */
   double objective_initial, objective_final;
   size_t tangled_initial, tangled_final;
+  int best_iteration;   /**< sweep after which the returned mesh's tangled count was
+                             first reached (0: the start); long before `iterations`
+                             when untangling stalled */
   size_t free_nodes;    /**< nodes the optimiser could move */
   double seconds;
 } hoc_optimize_result;

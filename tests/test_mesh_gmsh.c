@@ -281,6 +281,9 @@ static void test_best_state_kept(void) {
   CHECK(log.n == 10);
   CHECK(rose && log.count[log.n - 1] > fewest); /* the case this test is about */
   CHECK(res.tangled_final == fewest);
+  int first = 0; /* the sweep after which the fewest were first reached */
+  while (first < log.n && log.count[first] != fewest) ++first;
+  CHECK(res.best_iteration == first + 1);
   hoc_quality_stats st;
   CHECK_OK(hoc_mesh_measure(m, HOC_MEASURE_SHAPE, NULL, NULL, &st));
   CHECK(st.tangled == fewest);

@@ -409,6 +409,7 @@ typedef struct stage {
   int optimized;  /* the fields below are set */
   int iterations, converged;
   int stopped_at_limit; /* the optimiser ran out of iterations */
+  int best_iteration;   /* when the returned mesh's tangled count was first reached */
   double objective_initial, objective;
 } stage;
 
@@ -503,9 +504,10 @@ static int write_json(const char *path, const options *o, const report *r, const
              i ? "," : "", s->name, s->stats.order, s->stats.elements, s->stats.min, s->stats.max,
              s->stats.mean, s->stats.std, s->stats.tangled, s->seconds, s->stats.seconds);
     if (s->optimized)
-      text_add(&t, ", \"iterations\": %d, \"converged\": %s, \"objective_initial\": %.17g, "
-                   "\"objective\": %.17g",
-               s->iterations, s->converged ? "true" : "false", s->objective_initial, s->objective);
+      text_add(&t, ", \"iterations\": %d, \"converged\": %s, \"best_iteration\": %d, "
+                   "\"objective_initial\": %.17g, \"objective\": %.17g",
+               s->iterations, s->converged ? "true" : "false", s->best_iteration,
+               s->objective_initial, s->objective);
     text_add(&t, "}");
   }
   text_add(&t, "\n  ],\n  \"nodes\": %zu,\n  \"model_seconds\": %.6f,\n  \"write_seconds\": %.6f\n}\n",
@@ -601,6 +603,7 @@ static int optimize_stage(const options *o, report *r, hoc_mesh *mesh) {
   s->iterations = res.iterations;
   s->converged = res.converged;
   s->stopped_at_limit = res.iterations >= oo.max_iterations;
+  s->best_iteration = res.best_iteration;
   s->objective_initial = res.objective_initial;
   s->objective = res.objective_final;
   return EXIT_OK;
@@ -619,7 +622,13 @@ static void report_tangled(const hoc_mesh *mesh, const double *q, const stage *o
   size_t ne = hoc_mesh_num_elements(mesh), shown = 0, total = 0;
   for (size_t e = 0; e < ne; ++e) total += q[e] == 0.0;
   if (!total) return;
-  if (opt && !opt->converged && opt->stopped_at_limit)
+  if (opt && !opt->converged && opt->stopped_at_limit && opt->iterations >= 10 &&
+      2 * opt->best_iteration <= opt->iterations)
+    fprintf(stderr,
+            "%s: warning: %zu element(s) could not be untangled with this linear mesh (the fewest "
+            "tangled since iteration %d of %d; try a smaller --size or a larger --curvature):",
+            program, total, opt->best_iteration, opt->iterations);
+  else if (opt && !opt->converged && opt->stopped_at_limit)
     fprintf(stderr,
             "%s: warning: %zu element(s) still tangled after %d iteration(s) (the limit: "
             "raise --max-iterations):",

@@ -1484,6 +1484,7 @@ hoc_status hoc_mesh_optimize(hoc_mesh *mesh, const hoc_optimize_options *options
   HOC_TRY_GOTO(sweep_start(&ctx, &f, &qmin, &tangled), done);
   res.objective_initial = f;
   res.tangled_initial = tangled;
+  size_t fewest = tangled; /* and res.best_iteration = 0: when it was reached */
   if (tangled) HOC_TRY_GOTO(snapshot_take(&best, mesh, tangled, f), done);
   int stalled = 0;
   double hist_f[11], hist_q[11];
@@ -1529,6 +1530,10 @@ hoc_status hoc_mesh_optimize(hoc_mesh *mesh, const hoc_optimize_options *options
     size_t tangled_before = tangled;
     HOC_TRY_GOTO(sweep_start(&ctx, &f, &qmin, &tangled), done);
     res.iterations = it;
+    if (tangled < fewest) {
+      fewest = tangled;
+      res.best_iteration = it;
+    }
     if (tangled && tangled < best.tangled)
       HOC_TRY_GOTO(snapshot_take(&best, mesh, tangled, f), done);
     /* untangling that stalls: a smoother regularised landscape (larger

@@ -1,0 +1,51 @@
+#!/usr/bin/env bash
+# The optimiser against issue 3's bounds, per model and order: tangled
+# elements, min and mean q of the linear mesh and of the optimised one,
+# iterations, seconds and peak memory of the run.
+#
+# usage: bench/orders.sh [HOCAD] [MODELS_DIR]
+#   BENCH_MODELS  model file names (default: every model in MODELS_DIR,
+#                 default examples/models)
+#   BENCH_ORDERS  default "2 3 5"
+#   BENCH_THREADS default 2
+# Each run is `hocad mesh MODEL --order P --no-output` at hocad's default
+# sizes. Columns: bound checks 0 tangled, min q >= 0.9 x linear min q and
+# mean q >= linear mean q - 0.02 ("ok", or what failed).
+# SPDX-License-Identifier: GPL-2.0-or-later
+set -u
+here=$(cd "$(dirname "$0")/.." && pwd)
+hocad=$(readlink -f "${1:-$here/build/hocad}")
+models=$(readlink -f "${2:-$here/examples/models}")
+list=${BENCH_MODELS:-$(cd "$models" && ls *.step *.stp *.brep *.iges *.igs 2>/dev/null)}
+orders=${BENCH_ORDERS:-"2 3 5"}
+threads=${BENCH_THREADS:-2}
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+jget() { grep -o "\"name\": \"$2\"[^}]*" "$1" | grep -o "\"$3\": [-0-9.e+a-z]*" | head -1 | cut -d' ' -f2; }
+
+printf "%-26s %2s %8s %9s %15s %15s %5s %8s %7s  %s\n" model p elements tangled "min q lin->opt" \
+  "mean q lin->opt" iters opt_s peakMB bounds
+for m in $list; do
+  for p in $orders; do
+    rm -f "$work/r.json"
+    OMP_NUM_THREADS=$threads /usr/bin/time -f "%M" -o "$work/rss" "$hocad" mesh "$models/$m" --order "$p" \
+      --threads "$threads" --no-output -q --json "$work/r.json" > /dev/null 2>&1
+    rc=$?
+    if [ ! -s "$work/r.json" ]; then
+      echo "$m p=$p: hocad failed (exit $rc)"
+      continue
+    fi
+    ne=$(jget "$work/r.json" optimized elements)
+    t0=$(jget "$work/r.json" high-order tangled) t1=$(jget "$work/r.json" optimized tangled)
+    l_min=$(jget "$work/r.json" linear min) o_min=$(jget "$work/r.json" optimized min)
+    l_mean=$(jget "$work/r.json" linear mean) o_mean=$(jget "$work/r.json" optimized mean)
+    verdict=$(awk -v t="$t1" -v lm="$l_min" -v om="$o_min" -v la="$l_mean" -v oa="$o_mean" 'BEGIN {
+      v = ""; if (t > 0) v = v t " tangled; ";
+      if (om < 0.9 * lm) v = v "min q below 0.9 x linear; ";
+      if (oa < la - 0.02) v = v "mean q below linear - 0.02; ";
+      print v == "" ? "ok" : v }')
+    printf "%-26s %2s %8s %4s->%-4s %7.4f->%.4f %7.4f->%.4f %5s %8.2f %7.0f  %s\n" "$m" "$p" "$ne" "$t0" "$t1" \
+      "$l_min" "$o_min" "$l_mean" "$o_mean" "$(jget "$work/r.json" optimized iterations)" \
+      "$(jget "$work/r.json" optimized seconds)" "$(awk '{print $1/1024}' "$work/rss")" "$verdict"
+  done
+done
