@@ -15,20 +15,12 @@
 # its elev_s against gmsh's elev_s (gmsh's "Done meshing order P").
 # SPDX-License-Identifier: GPL-2.0-or-later
 set -u
-here=$(cd "$(dirname "$0")/.." && pwd)
+. "$(dirname "$0")/common.sh"
 hocad=$(readlink -f "${1:-$here/build/hocad}")
-gmsh=${2:-$here/../shared/peers/gmsh-5.0-dev}
-[ -x "$gmsh" ] || gmsh=$(command -v gmsh || true)
+gmsh=$(pick_gmsh "${2:-}")
 models=$(readlink -f "${3:-$here/examples/models}")
 threads=${BENCH_THREADS:-1}
 cases=${BENCH_CASES:-"gmsh_t20_component8.step:3:0 gear_f360.step:3:0 pulley_at3_t10.step:3:0 D150_aircraft_fused.brep:3:0"}
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-
-jget() { # jget FILE STAGE KEY: a number from hocad's JSON report
-  grep -o "\"name\": \"$2\"[^}]*" "$1" | grep -o "\"$3\": [-0-9.e+a-z]*" | head -1 | cut -d' ' -f2
-}
-jtop() { grep -o "\"$2\": [-0-9.e+]*" "$1" | head -1 | cut -d' ' -f2; }
 
 printf "%-26s %-7s %2s %8s %8s %7s %7s %7s %7s %7s %5s %8s %7s %7s %7s\n" model tool p elements nodes \
   linear_s elev_s meas_s opt_s write_s iters peakMB minq meanq tangled

@@ -11,10 +11,9 @@
 # mesh (mesh --linear, --no-optimize: the "high-order" stage's seconds).
 # SPDX-License-Identifier: GPL-2.0-or-later
 set -u
-here=$(cd "$(dirname "$0")/.." && pwd)
+. "$(dirname "$0")/common.sh"
 hocad=$(readlink -f "${1:-$here/build/hocad}")
-gmsh=${2:-$here/../shared/peers/gmsh-5.0-dev}
-[ -x "$gmsh" ] || gmsh=$(command -v gmsh || true)
+gmsh=$(pick_gmsh "${2:-}")
 model=$(readlink -f "${3:-$here/examples/models/D150_aircraft_fused.brep}")
 h=${BENCH_CLMAX:-0.0906}
 p=${BENCH_ORDER:-3}
@@ -22,8 +21,6 @@ runs=${BENCH_RUNS:-5}
 t=${BENCH_THREADS:-2}
 [ -x "$hocad" ] || { echo "no hocad at $hocad (build it first)"; exit 1; }
 [ -n "$gmsh" ] || { echo "no gmsh to compare with"; exit 1; }
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
 hmin=$(awk -v h="$h" 'BEGIN{print h/4}')
 "$gmsh" "$model" -2 -clmax "$h" -clmin "$hmin" -nt "$t" -o "$work/lin.msh" > "$work/lin.log" 2>&1 ||
   { echo "gmsh could not mesh $model"; exit 1; }

@@ -13,15 +13,12 @@
 # mean q >= linear mean q - 0.02 ("ok", or what failed).
 # SPDX-License-Identifier: GPL-2.0-or-later
 set -u
-here=$(cd "$(dirname "$0")/.." && pwd)
+. "$(dirname "$0")/common.sh"
 hocad=$(readlink -f "${1:-$here/build/hocad}")
 models=$(readlink -f "${2:-$here/examples/models}")
 list=${BENCH_MODELS:-$(cd "$models" && ls *.step *.stp *.brep *.iges *.igs 2>/dev/null)}
 orders=${BENCH_ORDERS:-"2 3 5"}
 threads=${BENCH_THREADS:-2}
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-jget() { grep -o "\"name\": \"$2\"[^}]*" "$1" | grep -o "\"$3\": [-0-9.e+a-z]*" | head -1 | cut -d' ' -f2; }
 
 printf "%-26s %2s %8s %9s %15s %15s %5s %8s %7s  %s\n" model p elements tangled "min q lin->opt" \
   "mean q lin->opt" iters opt_s peakMB bounds

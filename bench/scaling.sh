@@ -11,17 +11,13 @@
 # RSS, microseconds of optimisation per element, final quality.
 # SPDX-License-Identifier: GPL-2.0-or-later
 set -u
-here=$(cd "$(dirname "$0")/.." && pwd)
+. "$(dirname "$0")/common.sh"
 hocad=$(readlink -f "${1:-$here/build/hocad}")
-gmsh=${2:-$here/../shared/peers/gmsh-5.0-dev}
-[ -x "$gmsh" ] || gmsh=$(command -v gmsh || true)
+gmsh=$(pick_gmsh "${2:-}")
 model=$(readlink -f "${3:-$here/examples/models/D150_aircraft_fused.brep}")
 sizes=${BENCH_SIZES:-"1.2 0.4 0.13 0.0906 0.042"}
 order=${BENCH_ORDER:-3}
 threads_list=${BENCH_THREADS:-"1 2"}
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-jget() { grep -o "\"name\": \"$2\"[^}]*" "$1" | grep -o "\"$3\": [-0-9.e+a-z]*" | head -1 | cut -d' ' -f2; }
 
 printf "%8s %8s %8s %3s %7s %7s %7s %5s %8s %9s %7s %7s %7s\n" clmax elements nodes thr elev_s meas_s opt_s iters peakMB us/elem minq meanq tangled
 for h in $sizes; do

@@ -12,16 +12,13 @@
 # the ratios of the pairs.
 # SPDX-License-Identifier: GPL-2.0-or-later
 set -u
-here=$(cd "$(dirname "$0")/.." && pwd)
+. "$(dirname "$0")/common.sh"
 hocad=$(readlink -f "${1:-$here/build/hocad}")
-gmsh=${2:-$here/../shared/peers/gmsh-5.0-dev}
-[ -x "$gmsh" ] || gmsh=$(command -v gmsh || true)
+gmsh=$(pick_gmsh "${2:-}")
 model=$(readlink -f "${3:-$here/examples/models/D150_aircraft_fused.brep}")
 h=${BENCH_SIZE:-0.0906}
 order=${BENCH_ORDER:-3}
 runs=${BENCH_RUNS:-7}
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
 hmin=$(awk -v h="$h" 'BEGIN{print h/4}')
 "$gmsh" "$model" -2 -clmax "$h" -clmin "$hmin" -nt 1 -o "$work/lin.msh" > "$work/g.log" 2>&1 ||
   { echo "gmsh failed at clmax $h"; exit 1; }

@@ -1,0 +1,20 @@
+# Shared by the bench scripts (sourced, not run): the project's root, gmsh,
+# a work directory removed on exit, and readers of hocad's JSON report.
+# SPDX-License-Identifier: GPL-2.0-or-later
+here=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+
+# pick_gmsh [GMSH]: the given gmsh, else the 5.0 peer of ../shared/peers,
+# else Debian's gmsh on the PATH (empty if none).
+pick_gmsh() {
+  local g=${1:-$here/../shared/peers/gmsh-5.0-dev}
+  [ -x "$g" ] || g=$(command -v gmsh || true)
+  echo "$g"
+}
+
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+
+# jget FILE STAGE KEY: a number of one stage of hocad's JSON report
+jget() { grep -o "\"name\": \"$2\"[^}]*" "$1" | grep -o "\"$3\": [-0-9.e+a-z]*" | head -1 | cut -d' ' -f2; }
+# jtop FILE KEY: a top-level number of the report
+jtop() { grep -o "\"$2\": [-0-9.e+]*" "$1" | head -1 | cut -d' ' -f2; }
