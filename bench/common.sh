@@ -18,3 +18,6 @@ trap 'rm -rf "$work"' EXIT
 jget() { grep -o "\"name\": \"$2\"[^}]*" "$1" | grep -o "\"$3\": [-0-9.e+a-z]*" | head -1 | cut -d' ' -f2; }
 # jtop FILE KEY: a top-level number of the report
 jtop() { grep -o "\"$2\": [-0-9.e+]*" "$1" | head -1 | cut -d' ' -f2; }
+# rss_mb FILE: peak RSS in MB from /usr/bin/time -f %M (its last line: a
+# failed command's status line comes first)
+rss_mb() { tail -n 1 "$1" | awk '{print $1 / 1024}'; }

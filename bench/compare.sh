@@ -53,7 +53,7 @@ for c in $cases; do
       "$(jget "$work/h.json" optimized elements)" "$nodes" "$(jget "$work/h.json" linear seconds)" \
       "$(jget "$work/h.json" high-order seconds)" "$meas" "$(jget "$work/h.json" optimized seconds)" \
       "$(jtop "$work/h.json" write_seconds)" "$(jget "$work/h.json" optimized iterations)" \
-      "$(awk '{print $1/1024}' "$work/h.rss")" "$(jget "$work/h.json" optimized min)" \
+      "$(rss_mb "$work/h.rss")" "$(jget "$work/h.json" optimized min)" \
       "$(jget "$work/h.json" optimized mean)" "$(jget "$work/h.json" optimized tangled)"
   else
     echo "$m hocad p=$p failed (exit $rc)"
@@ -71,7 +71,7 @@ for c in $cases; do
       nodes=$(jtop "$work/g.json" nodes)
       printf "%-26s %-7s %2s %8s %8s %7.2f %7.2f %7s %7.2f %7s %5s %8.0f %7.4f %7.4f %7s\n" "$m" gmsh "$p" \
         "$(jget "$work/g.json" input elements)" "$nodes" "$(awk -v a="${l1:-0}" -v b="${lin:-0}" 'BEGIN{print a+b}')" \
-        "${elev:-0}" - "${opt:-0}" - - "$(awk '{print $1/1024}' "$work/g.rss")" \
+        "${elev:-0}" - "${opt:-0}" - - "$(rss_mb "$work/g.rss")" \
         "$(jget "$work/g.json" input min)" "$(jget "$work/g.json" input mean)" "$(jget "$work/g.json" input tangled)"
     else
       echo "$m gmsh p=$p: no readable mesh ($(grep -m1 -i -E 'error' "$work/g.log" | grep -v summary || grep -m1 -i error "$work/g.log"))"
@@ -86,7 +86,7 @@ for c in $cases; do
         "$(jget "$work/hg.json" optimized elements)" "$nodes" "$(jget "$work/hg.json" linear seconds)" \
         "$(jget "$work/hg.json" high-order seconds)" - "$(jget "$work/hg.json" optimized seconds)" \
         "$(jtop "$work/hg.json" write_seconds)" "$(jget "$work/hg.json" optimized iterations)" \
-        "$(awk '{print $1/1024}' "$work/hg.rss")" "$(jget "$work/hg.json" optimized min)" \
+        "$(rss_mb "$work/hg.rss")" "$(jget "$work/hg.json" optimized min)" \
         "$(jget "$work/hg.json" optimized mean)" "$(jget "$work/hg.json" optimized tangled)"
     else
       echo "$m hocad on gmsh's linear mesh p=$p failed"

@@ -40,5 +40,5 @@ for m in $list; do
     "$(jget "$work/r.json" optimized tangled)" "$(jget "$work/r.json" input min)" \
     "$(jget "$work/r.json" optimized min)" "$(jget "$work/r.json" input mean)" \
     "$(jget "$work/r.json" optimized mean)" "$(jget "$work/r.json" optimized iterations)" \
-    "$(jget "$work/r.json" optimized seconds)" "$(awk '{print $1/1024}' "$work/rss")"
+    "$(jget "$work/r.json" optimized seconds)" "$(rss_mb "$work/rss")"
 done

@@ -43,6 +43,6 @@ for m in $list; do
       print v == "" ? "ok" : v }')
     printf "%-26s %2s %8s %4s->%-4s %7.4f->%.4f %7.4f->%.4f %5s %8.2f %7.0f  %s\n" "$m" "$p" "$ne" "$t0" "$t1" \
       "$l_min" "$o_min" "$l_mean" "$o_mean" "$(jget "$work/r.json" optimized iterations)" \
-      "$(jget "$work/r.json" optimized seconds)" "$(awk '{print $1/1024}' "$work/rss")" "$verdict"
+      "$(jget "$work/r.json" optimized seconds)" "$(rss_mb "$work/rss")" "$verdict"
   done
 done

@@ -36,7 +36,7 @@ for h in $sizes; do
     nodes=$(grep -o '"nodes": [0-9]*' "$work/r.json" | cut -d' ' -f2)
     printf "%8s %8s %8s %3s %7.2f %7.2f %7.2f %5s %8.0f %9.2f %7.4f %7.4f %7s\n" "$h" "$ne" "$nodes" "$t" \
       "$(jget "$work/r.json" high-order seconds)" "$meas" "$opt" "$(jget "$work/r.json" optimized iterations)" \
-      "$(awk '{print $1/1024}' "$work/rss")" "$(awk -v s="$opt" -v n="$ne" 'BEGIN{print 1e6*s/n}')" \
+      "$(rss_mb "$work/rss")" "$(awk -v s="$opt" -v n="$ne" 'BEGIN{print 1e6*s/n}')" \
       "$(jget "$work/r.json" optimized min)" "$(jget "$work/r.json" optimized mean)" \
       "$(jget "$work/r.json" optimized tangled)"
   done

@@ -32,6 +32,13 @@ ok "file measures as the run did ($mean_mesh vs $mean_file)" "awk -v a=$mean_mes
 "$hocad" optimize "$model" raised.msh -o fixed.msh --json fix.json > /dev/null 2>&1
 ok "optimize exits 0" "[ $? -eq 0 ]"
 ok "optimize untangles" "grep -q '\"name\": \"optimized\".*\"tangled\": 0,' fix.json"
+# a tangled input is re-placed from its corners; hocad's own raised mesh
+# comes back with the same tangled elements (the same placement)
+t_in=$(grep -o '"name": "input"[^}]*' fix.json | grep -o '"tangled": [0-9]*' | cut -d' ' -f2)
+t_re=$(grep -o '"name": "re-placed"[^}]*' fix.json | grep -o '"tangled": [0-9]*' | cut -d' ' -f2)
+ok "re-placed stage, as tangled as the input ($t_in, ${t_re:-none})" "[ -n '$t_re' ] && [ '$t_in' -gt 0 ] && [ '$t_re' = '$t_in' ]"
+"$hocad" optimize "$model" raised.msh -o kept.msh --keep-nodes --json kept.json > /dev/null 2>&1
+ok "--keep-nodes: no re-placed stage, untangled" "! grep -q re-placed kept.json && grep -q '\"name\": \"optimized\".*\"tangled\": 0,' kept.json"
 # order above 10: VTU only
 "$hocad" mesh "$src/examples/models/screw.step" --order 12 --no-optimize --vtu s12.vtu --no-output > /dev/null 2>&1
 ok "order 12 to vtu" "[ $? -eq 0 ] && [ -s s12.vtu ]"
