@@ -1096,18 +1096,9 @@ static int line_monotone(const opt *o, size_t l) {
 }
 
 /* While untangling stalls (a raised regularisation), the valid neighbours
- * of tangled elements may pass through sigma = 0 for a while, and those on
- * the face's boundary may fold in (u, v) (on a regular parametrisation the
- * same thing): some folds only open by moving their neighbourhood through
- * an invalid state. */
+ * of tangled elements may pass through sigma = 0 for a while: some folds
+ * only open by moving their neighbourhood through an invalid state. */
 static int relaxed(const opt *o, size_t e) { return o->region[e] && o->eps > 2e-3; }
-
-/* Element e lies on a face with a pole (where (u, v) folds without the
- * surface folding): there the fold in (u, v) stays refused. */
-static int at_pole(const opt *o, size_t e) {
-  const hoc_cad_face *f = &o->model->faces[o->m->elem_face[e]];
-  return f->pole[0] || f->pole[1] || f->pole[2] || f->pole[3];
-}
 
 /* Local objective of block b at its trial (nodes flagged moving); 0 if the
  * trial breaks a rule. */
@@ -1123,9 +1114,7 @@ static int block_trial_flagged(const opt *o, size_t b, scratch *s, double fmax, 
   for (size_t a = o->B->be_start[b]; a < o->B->be_start[b + 1]; ++a) {
     size_t e = o->B->be_elem[a];
     gather(o, e, s->x, s->n);
-    if (o->pvalid[e] && o->on_boundary[e] && !(relaxed(o, e) && !at_pole(o, e)) &&
-        !param_valid(o, e, s->uv))
-      return 0;
+    if (o->pvalid[e] && o->on_boundary[e] && !param_valid(o, e, s->uv)) return 0;
     double smin;
     int nr = elem_residuals(o, e, s->x, s->n, s->r, NULL, &smin);
     if (o->valid[e] && !relaxed(o, e) && !(smin > 0)) return 0;
