@@ -12,11 +12,17 @@
 #include <stdlib.h>
 #include <string.h>
 
-static void test_model(const char *name, double min_linear_q) {
+/* A bundled model by file name, or NULL (the failure counted). */
+static hoc_model *open_bundled(const char *name) {
   char path[1024];
   snprintf(path, sizeof path, "%s/%s", HOC_MODELS_DIR, name);
-  hoc_model *model;
+  hoc_model *model = NULL;
   CHECK_OK(hoc_model_open(path, &model));
+  return model;
+}
+
+static void test_model(const char *name, double min_linear_q) {
+  hoc_model *model = open_bundled(name);
   if (!model) return;
   hoc_mesh *lin;
   CHECK_OK(hoc_mesh_generate_linear(model, NULL, &lin));
@@ -53,10 +59,7 @@ static void test_model(const char *name, double min_linear_q) {
 
 /* gmsh's own order 3 at gmsh's default size, read back and measured. */
 static void test_gmsh_order3_t20(void) {
-  char path[1024];
-  snprintf(path, sizeof path, "%s/gmsh_t20_component8.step", HOC_MODELS_DIR);
-  hoc_model *model;
-  CHECK_OK(hoc_model_open(path, &model));
+  hoc_model *model = open_bundled("gmsh_t20_component8.step");
   if (!model) return;
   int ierr = 0;
   /* gmsh's defaults, as the gmsh program uses them */
@@ -139,10 +142,7 @@ static void test_bad_input(void) {
  * of one face on different threads) give bit for bit the serial results,
  * on a model with both concurrent kinds and kinds the backend serialises. */
 static void test_concurrent_eval(const char *name) {
-  char path[1024];
-  snprintf(path, sizeof path, "%s/%s", HOC_MODELS_DIR, name);
-  hoc_model *model;
-  CHECK_OK(hoc_model_open(path, &model));
+  hoc_model *model = open_bundled(name);
   if (!model) return;
   CHECK(model->thread_safe);
   enum { N = 400, PIECE = 20 };
@@ -206,10 +206,7 @@ done:
  * for one: 8.5e-7 degrees apart, measured directly through gmsh). One
  * element fills each sliver; exactly those 12 are found. */
 static void test_cusp(void) {
-  char path[1024];
-  snprintf(path, sizeof path, "%s/gmsh_t20_component8.step", HOC_MODELS_DIR);
-  hoc_model *model;
-  CHECK_OK(hoc_model_open(path, &model));
+  hoc_model *model = open_bundled("gmsh_t20_component8.step");
   if (!model) return;
   hoc_mesh *lin = NULL, *m = NULL;
   CHECK_OK(hoc_mesh_generate_linear(model, NULL, &lin));
@@ -253,10 +250,7 @@ static int log_tangled(void *user, const hoc_optimize_iteration *it) {
 }
 
 static void test_best_state_kept(void) {
-  char path[1024];
-  snprintf(path, sizeof path, "%s/occt_bottle.brep", HOC_MODELS_DIR);
-  hoc_model *model;
-  CHECK_OK(hoc_model_open(path, &model));
+  hoc_model *model = open_bundled("occt_bottle.brep");
   if (!model) return;
   hoc_mesh *lin = NULL, *m = NULL;
   hoc_linear_options lo;

@@ -619,7 +619,6 @@ static int optimize_stage(const options *o, report *r, hoc_mesh *mesh) {
   return EXIT_OK;
 }
 
-/* Where tangled elements remain: say which (on stderr). */
 /* The optimised stage of a report, or NULL. */
 static const stage *optimized_stage(const report *r) {
   for (int i = 0; i < r->n; ++i)
@@ -627,7 +626,8 @@ static const stage *optimized_stage(const report *r) {
   return NULL;
 }
 
-/* `opt` is the optimised stage, or NULL if the mesh was not optimised. */
+/* Where tangled elements remain: say which, and why (on stderr). `opt` is
+ * the optimised stage, or NULL if the mesh was not optimised. */
 static void report_tangled(const hoc_mesh *mesh, const double *q, const stage *opt) {
   size_t ne = hoc_mesh_num_elements(mesh), shown = 0, total = 0;
   for (size_t e = 0; e < ne; ++e) total += q[e] == 0.0;
@@ -968,19 +968,18 @@ done:
 static int replace_nodes(const options *o, report *r, const hoc_mesh *mesh, hoc_mesh **alt) {
   double t0 = now();
   hoc_mesh *lin = NULL;
-  hoc_quality_stats st;
   hoc_status s = hoc_mesh_elevate(mesh, 1, HOC_NODES_EQUISPACED, &lin);
   if (s == HOC_OK) s = hoc_mesh_elevate(lin, hoc_mesh_order(mesh), hoc_mesh_nodeset(mesh), alt);
   hoc_mesh_destroy(&lin);
-  if (s == HOC_OK) s = hoc_mesh_measure(*alt, o->measure, NULL, NULL, &st);
+  int code = s == HOC_OK ? measure_stage(o, r, "re-placed", *alt, now() - t0, NULL) : fail(s, 0);
+  if (code) {
+    hoc_mesh_destroy(alt);
+    return code;
+  }
   size_t in = r->stages[0].stats.tangled;
-  if (s != HOC_OK || st.tangled > in + in / 10) hoc_mesh_destroy(alt);
-  if (s != HOC_OK) return fail(s, 0);
-  if (*alt) {
-    stage *sg = &r->stages[r->n++];
-    sg->name = "re-placed";
-    sg->seconds = now() - t0;
-    sg->stats = st;
+  if (r->stages[r->n - 1].stats.tangled > in + in / 10) { /* clearly worse: not used */
+    r->n--;
+    hoc_mesh_destroy(alt);
   }
   return EXIT_OK;
 }

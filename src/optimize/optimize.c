@@ -329,9 +329,10 @@ static hoc_status build_blocks(opt *o, int family) {
     growlist cs = {0}, cn = {0};
     double *w = NULL;
     size_t wcap = 0;
-    size_t *last = malloc((nn + 1) * sizeof *last); /* block that last took the node */
+    size_t *last = hoc_realloc(NULL, nn + 1, sizeof *last); /* block that last took the node */
     if (!last) status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
-    else memset(last, 0xff, (nn + 1) * sizeof *last);
+    for (size_t i = 0; last && i <= nn; ++i)
+      last[i] = SIZE_MAX;
     for (size_t b = 0; b < nb && status == HOC_OK; ++b) {
       status = grow_push(&cs, cn.n);
       size_t k = B->bn_node[B->bn_start[b]];
@@ -910,7 +911,8 @@ static void set_moving(opt *o, size_t b, unsigned char v) {
 static hoc_status screen(opt *o) {
   hoc_mesh *m = o->m;
   size_t ne = m->n_elems, np = (size_t)o->np;
-  double *contrib = malloc((5 * ne * np + 1) * sizeof *contrib); /* [ne][np][g0 g1 h00 h01 h11] */
+  /* [ne][np][g0 g1 h00 h01 h11], every entry written below (not zeroed) */
+  double *contrib = hoc_realloc(NULL, 5 * ne * np + 1, sizeof *contrib);
   HOC_CHECK(contrib, HOC_ERR_MEMORY, "out of memory");
   int nr_max = o->nq + o->np + o->t->nv, failed = 0;
 #pragma omp parallel
