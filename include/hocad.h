@@ -106,6 +106,8 @@ typedef struct hoc_linear_options {
   double size_min;  /**< minimum edge length (0: size_max / 10) */
   double curvature; /**< elements per 2 pi of curvature radius (0: 12 for order 1, 8 above) */
   int order;        /**< order the mesh will be raised to, used for the default curvature */
+  const double *face_size; /**< NULL, or [faces] (index order) an upper bound on the edge
+                                length on each face and its boundary curves (0: none) */
   hoc_progress_fn progress;
   void *progress_user;
 } hoc_linear_options;
@@ -206,6 +208,15 @@ hoc_status hoc_mesh_measure(const hoc_mesh *mesh, hoc_measure measure, double *q
 /** CAD face tag of element e (0-based), or -1 if out of range. */
 int hoc_mesh_element_face_tag(const hoc_mesh *mesh, size_t e);
 
+/** Bounds on the edge length for meshing again finer where flagged elements
+ *  lie (hoc_linear_options.face_size): on the face of each flagged element,
+ *  face_size[face index] becomes factor (0 < factor < 1) times the longest
+ *  straight edge between its corners, unless already smaller (0: no bound).
+ *  @param[in]     elements   per-element flag (e.g. tangled from hoc_mesh_measure)
+ *  @param[in,out] face_size  [hoc_model_num_faces] */
+hoc_status hoc_mesh_refine_bounds(const hoc_mesh *mesh, const unsigned char *elements,
+                                  double factor, double *face_size);
+
 /** A corner of an element at a CAD vertex where both of the element's
  *  edges lie on CAD curves that meet there at a small angle (a cusp of the
  *  model). The element follows both curves, so as the order grows its
@@ -244,7 +255,12 @@ typedef int (*hoc_optimize_progress_fn)(void *user, const hoc_optimize_iteration
 typedef struct hoc_optimize_options {
   hoc_measure measure;  /**< distortion measure (default shape) */
   int fix_curves;       /**< 1: nodes on CAD curves stay where they are (the seed's choice) */
-  int max_iterations;   /**< sweeps (0: 100) */
+  int max_iterations;   /**< sweeps (0: 100); if elements are still tangled after them
+                             (or after 40 sweeps without a new fewest tangled count), a
+                             second attempt of up to half as many more restarts from the
+                             best state reached, with boundary elements next to a fold
+                             free to fold in (u, v) too (faces without a pole); it ends
+                             early the same way */
   double tolerance;     /**< a node whose move lowers f by less than tolerance * f / (free
                              nodes) goes to sleep; the optimisation ends when every node
                              sleeps, or when, with no tangled element, ten sweeps lowered f
@@ -264,6 +280,7 @@ typedef struct hoc_optimize_result {
   int best_iteration;   /**< sweep after which the returned mesh's tangled count was
                              first reached (0: the start); long before `iterations`
                              when untangling stalled */
+  int second_attempt;   /**< first sweep of the second attempt (0: none was needed) */
   size_t free_nodes;    /**< nodes the optimiser could move */
   double seconds;
 } hoc_optimize_result;

@@ -43,12 +43,24 @@ ok "--keep-nodes: no re-placed stage, untangled" "! grep -q re-placed kept.json 
 "$hocad" mesh "$src/examples/models/screw.step" --order 12 --no-optimize --vtu s12.vtu --no-output > /dev/null 2>&1
 ok "order 12 to vtu" "[ $? -eq 0 ] && [ -s s12.vtu ]"
 # stopped by --max-iterations with tangled elements left: exit 5 and the
-# limit named as the reason (order 5 of t20 keeps 10 tangled after 1 sweep)
-"$hocad" mesh "$model" --order 5 --max-iterations 1 --no-output -q > /dev/null 2> lim.txt
+# limit named as the reason (order 3 of the bottle keeps tangled elements
+# after 1 sweep and the second attempt's 1)
+bottle=$src/examples/models/occt_bottle.brep
+"$hocad" mesh "$bottle" --order 3 --max-iterations 1 --refinements 0 --no-output -q --json lim.json \
+  > /dev/null 2> lim.txt
 code=$?
 ok "tangled at the iteration limit exits 5" "[ $code -eq 5 ]"
-ok "the limit is named" "grep -q 'still tangled after 1 iteration(s) (the limit: raise --max-iterations)' lim.txt"
+ok "the limit is named" "grep -q 'still tangled after 2 iteration(s) (the limit, with a second attempt: raise --max-iterations)' lim.txt"
 ok "no cusp note before convergence" "! grep -q 'cusp' lim.txt"
+ok "second attempt in the json" "grep -q '\"second_attempt\": 2,' lim.json && grep -q '\"refinements\": 0,' lim.json"
+# tangled elements left: their faces meshed again finer, at most twice
+"$hocad" mesh "$bottle" --order 3 --max-iterations 1 --no-output --json ref.json > ref.txt 2> referr.txt
+n_ref=$(grep -o '"refinements": [0-9]*' ref.json | cut -d' ' -f2)
+ok "refinements said and counted (${n_ref:-none})" "[ -n '$n_ref' ] && [ '$n_ref' -ge 1 ] && [ '$n_ref' -le 2 ] && [ \$(grep -c 'meshing their faces again' referr.txt) -eq '$n_ref' ]"
+ok "one report, of the last attempt" "[ \$(grep -c '^linear ' ref.txt) -eq 1 ] && [ \$(grep -c '\"name\"' ref.json) -eq 3 ]"
+lin_first=$(grep -o '"name": "linear"[^}]*' lim.json | grep -o '"elements": [0-9]*' | cut -d' ' -f2)
+lin_last=$(grep -o '"name": "linear"[^}]*' ref.json | grep -o '"elements": [0-9]*' | cut -d' ' -f2)
+ok "the last linear mesh is finer ($lin_first -> $lin_last)" "[ '$lin_last' -gt '$lin_first' ]"
 # no temporary files left behind
 ok "no temporaries" "[ -z \"\$(ls -A | grep tmp- || true)\" ]"
 echo "$pass passed, $fail failed"

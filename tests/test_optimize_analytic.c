@@ -85,6 +85,7 @@ static void check_kind(hoc_analytic_kind kind, double a, double b, int nu, int n
          before.tangled, after.tangled, before.min, after.min, r.iterations);
   CHECK(after.tangled == 0);
   CHECK(r.tangled_final == 0 && r.tangled_initial == before.tangled);
+  CHECK(r.second_attempt == 0); /* untangled in the first */
   CHECK(after.min > 0.3);
   CHECK_OK(hoc_mesh_check_gradient(m, HOC_MEASURE_SHAPE, 0, 50, &gerr));
   CHECK(gerr < 1e-6);
@@ -161,6 +162,43 @@ static void check_threads(void) {
   hoc_model_destroy(&model);
 }
 
+/* Sweeps that run out with elements still tangled: a second attempt of half
+ * as many from the best state reached (relaxed (u, v) rule on the torus,
+ * which has no pole); nodes stay on the surface, the count never ends above
+ * the start, and a full run from there untangles. */
+static void check_second_attempt(void) {
+  const double a = 3, b = 1;
+  hoc_model *model;
+  CHECK_OK(hoc_cad_create_analytic(HOC_ANALYTIC_TORUS, a, b, &model));
+  hoc_mesh *lin, *m;
+  CHECK_OK(hoc_mesh_grid_linear(model, 16, 6, &lin));
+  CHECK_OK(hoc_mesh_elevate(lin, 3, HOC_NODES_EQUISPACED, &m));
+  tangle(m, 2);
+  hoc_optimize_options o;
+  hoc_optimize_options_default(&o);
+  o.max_iterations = 2;
+  hoc_optimize_result r;
+  CHECK_OK(hoc_mesh_optimize(m, &o, &r));
+  printf("second attempt: %zu tangled -> %zu in %d sweeps (second from sweep %d)\n",
+         r.tangled_initial, r.tangled_final, r.iterations, r.second_attempt);
+  CHECK(r.tangled_initial > 0);
+  CHECK(r.tangled_final > 0 ? r.second_attempt == 3 && r.iterations == 3 : r.second_attempt == 0);
+  CHECK(r.second_attempt > 0); /* this mesh needs more than two sweeps */
+  CHECK(r.tangled_final <= r.tangled_initial);
+  hoc_quality_stats st;
+  CHECK_OK(hoc_mesh_measure(m, HOC_MEASURE_SHAPE, NULL, NULL, &st));
+  CHECK(st.tangled == r.tangled_final);
+  double worst = 0;
+  for (size_t i = 0; i < m->n_nodes; ++i)
+    worst = fmax(worst, off_surface(HOC_ANALYTIC_TORUS, a, b, m->xyz + 3 * i));
+  CHECK(worst <= 1e-13 * a);
+  CHECK_OK(hoc_mesh_optimize(m, NULL, &r));
+  CHECK(r.tangled_final == 0);
+  hoc_mesh_destroy(&m);
+  hoc_mesh_destroy(&lin);
+  hoc_model_destroy(&model);
+}
+
 int main(void) {
   check_kind(HOC_ANALYTIC_SPHERE, 1.0, 0, 16, 8, 3);
   check_kind(HOC_ANALYTIC_CYLINDER, 1.0, 2.0, 12, 4, 3);
@@ -168,5 +206,6 @@ int main(void) {
   check_kind(HOC_ANALYTIC_SPHERE, 1.0, 0, 12, 6, 5);
   check_optimum();
   check_threads();
+  check_second_attempt();
   return test_report();
 }

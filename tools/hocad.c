@@ -72,7 +72,7 @@ static double now(void) {
 typedef struct options {
   const char *model, *mesh_in, *out, *vtu, *json, *linear, *png, *histogram;
   int order, threads, quiet, no_output, optimize, have_order, fix_curves, max_iterations,
-      check_gradient, keep_nodes;
+      check_gradient, keep_nodes, refinements;
   hoc_picture_options picture;
   double size, size_min, curvature;
   hoc_nodeset nodes;
@@ -166,10 +166,11 @@ static const char *opt_value(int argc, char **argv, int *i, const char *name, in
   return argv[++*i];
 }
 
-#define OPTIMIZE_OPTIONS                                                                   \
-  "  --fix-curves         keep nodes on CAD curves fixed (the seed's choice);\n"             \
-  "                       by default they slide along their curve\n"                          \
-  "  --max-iterations N   optimizer sweeps (default 100)\n"                                   \
+#define OPTIMIZE_OPTIONS                                                                           \
+  "  --fix-curves         keep nodes on CAD curves fixed (the seed's choice);\n"                   \
+  "                       by default they slide along their curve\n"                               \
+  "  --max-iterations N   optimizer sweeps (default 100); if elements are still\n"                 \
+  "                       tangled then, a second attempt of up to N/2 more\n"                      \
   "  --check-gradient     compare the analytic gradient with finite differences\n"
 
 #define PICTURE_OPTIONS(size_option)                                                      \
@@ -242,6 +243,9 @@ static const char *usage_mesh =
     "  --measure M          shape | oddy (default shape)\n"
     "  --linear M.msh       start from this linear mesh of MODEL instead of meshing\n"
     "  --no-optimize        stop after raising the order\n"
+    "  --refinements N      if elements stay tangled, mesh their faces again with\n"
+    "                       edges half as long and start again, at most N times\n"
+    "                       (default 2; not with --linear)\n"
     OPTIMIZE_OPTIONS
     "  -o, --output F.msh   gmsh MSH 4.1 output (default: MODEL-NAME_pP.msh here;\n"
     "                       orders above 10 have no MSH type: use --vtu)\n"
@@ -361,6 +365,8 @@ static int parse(int argc, char **argv, options *o, const char **pos, int max_po
       if (!parse_int("--max-iterations", v, 1, 100000, &o->max_iterations)) return 0;
     } else if (opt && (VALUE("--output") || VALUE("-o"))) {
       o->out = v;
+    } else if (mesh && VALUE("--refinements")) {
+      if (!parse_int("--refinements", v, 0, 10, &o->refinements)) return 0;
     } else if (mesh && (VALUE("--order") || VALUE("-p"))) {
       if (!parse_int("--order", v, 1, HOC_MAX_ORDER, &o->order)) return 0;
       o->have_order = 1;
@@ -420,6 +426,7 @@ typedef struct stage {
   int iterations, converged;
   int stopped_at_limit; /* the optimiser ran out of iterations */
   int best_iteration;   /* when the returned mesh's tangled count was first reached */
+  int second_attempt;   /* first sweep of the optimiser's second attempt, or 0 */
   double objective_initial, objective;
 } stage;
 
@@ -429,6 +436,7 @@ typedef struct report {
   double write_seconds; /* writing the mesh files */
   double model_seconds; /* reading the CAD model */
   size_t nodes;         /* of the final mesh */
+  int refinements;      /* times faces with tangled elements were meshed again finer */
 } report;
 
 static void print_table(const report *r) {
@@ -515,13 +523,15 @@ static int write_json(const char *path, const options *o, const report *r, const
              s->stats.mean, s->stats.std, s->stats.tangled, s->seconds, s->stats.seconds);
     if (s->optimized)
       text_add(&t, ", \"iterations\": %d, \"converged\": %s, \"best_iteration\": %d, "
-                   "\"objective_initial\": %.17g, \"objective\": %.17g",
+                   "\"second_attempt\": %d, \"objective_initial\": %.17g, \"objective\": %.17g",
                s->iterations, s->converged ? "true" : "false", s->best_iteration,
-               s->objective_initial, s->objective);
+               s->second_attempt, s->objective_initial, s->objective);
     text_add(&t, "}");
   }
-  text_add(&t, "\n  ],\n  \"nodes\": %zu,\n  \"model_seconds\": %.6f,\n  \"write_seconds\": %.6f\n}\n",
-           r->nodes, r->model_seconds, r->write_seconds);
+  text_add(&t,
+           "\n  ],\n  \"refinements\": %d,\n  \"nodes\": %zu,\n  \"model_seconds\": %.6f,\n  "
+           "\"write_seconds\": %.6f\n}\n",
+           r->refinements, r->nodes, r->model_seconds, r->write_seconds);
   if (t.failed) {
     free(t.s);
     error_line("out of memory writing the report");
@@ -614,6 +624,7 @@ static int optimize_stage(const options *o, report *r, hoc_mesh *mesh) {
   s->converged = res.converged;
   s->stopped_at_limit = res.iterations >= oo.max_iterations;
   s->best_iteration = res.best_iteration;
+  s->second_attempt = res.second_attempt;
   s->objective_initial = res.objective_initial;
   s->objective = res.objective_final;
   return EXIT_OK;
@@ -640,8 +651,8 @@ static void report_tangled(const hoc_mesh *mesh, const double *q, const stage *o
             program, total, opt->best_iteration, opt->iterations);
   else if (opt && !opt->converged && opt->stopped_at_limit)
     fprintf(stderr,
-            "%s: warning: %zu element(s) still tangled after %d iteration(s) (the limit: "
-            "raise --max-iterations):",
+            "%s: warning: %zu element(s) still tangled after %d iteration(s) (the limit, with a "
+            "second attempt: raise --max-iterations):",
             program, total, opt->iterations);
   else if (opt)
     fprintf(stderr, "%s: warning: %zu element(s) could not be untangled with this linear mesh "
@@ -749,10 +760,61 @@ static int write_pictures(const options *o, int n, const hoc_mesh *const *meshes
 
 /* Commands ---------------------------------------------------------------- */
 
+/* After an optimised stage that left elements tangled: bound the edge
+ * length on their faces by half their longest edge (*face_size, allocated
+ * on first use), say so, and start the report again. */
+static int refine_faces(const options *o, report *r, const hoc_model *model, const hoc_mesh *lin,
+                        const hoc_mesh *ho, double **face_size) {
+  size_t ne = hoc_mesh_num_elements(ho);
+  unsigned char *tangled = calloc(ne ? ne : 1, 1);
+  if (!*face_size) *face_size = calloc((size_t)hoc_model_num_faces(model) + 1, sizeof **face_size);
+  if (!tangled || !*face_size) {
+    free(tangled);
+    error_line("out of memory");
+    return EXIT_FAILURE_;
+  }
+  hoc_status st = hoc_mesh_measure(ho, o->measure, NULL, tangled, NULL);
+  if (st == HOC_OK) st = hoc_mesh_refine_bounds(lin, tangled, 0.5, *face_size);
+  if (st != HOC_OK) {
+    free(tangled);
+    return fail(st, 0);
+  }
+  r->refinements++;
+  if (!o->quiet) {
+    size_t total = 0;
+    for (size_t e = 0; e < ne; ++e)
+      total += tangled[e];
+    fprintf(stderr,
+            "%s: %zu element(s) still tangled; meshing their faces again with edges half "
+            "as long (refinement %d of at most %d): faces",
+            program, total, r->refinements, o->refinements);
+    /* each face once, in element order */
+    int shown[20], n_shown = 0, more = 0;
+    for (size_t e = 0; e < ne; ++e) {
+      if (!tangled[e]) continue;
+      int tag = hoc_mesh_element_face_tag(ho, e), seen = 0;
+      for (int k = 0; k < n_shown && !seen; ++k)
+        seen = shown[k] == tag;
+      if (seen) continue;
+      if (n_shown == 20) {
+        more = 1;
+        break;
+      }
+      shown[n_shown++] = tag;
+      fprintf(stderr, " %d", tag);
+    }
+    fprintf(stderr, "%s\n", more ? " ..." : "");
+  }
+  free(tangled);
+  r->n = 0;
+  return EXIT_OK;
+}
+
 static int cmd_mesh(int argc, char **argv) {
   options o = {0};
   o.order = 3;
   o.optimize = 1;
+  o.refinements = 2;
   const char *pos[1];
   int n_pos, pr = parse(argc, argv, &o, pos, 1, &n_pos, CMD_MESH);
   if (pr < 0) {
@@ -785,7 +847,7 @@ static int cmd_mesh(int argc, char **argv) {
   int code = EXIT_OK;
   hoc_model *model = NULL;
   hoc_mesh *lin = NULL, *ho = NULL, *written = NULL, *raised = NULL;
-  double *q = NULL;
+  double *q = NULL, *face_size = NULL;
   report r = {0};
   progress(&o, "reading %s", o.model);
   double t0 = now();
@@ -806,54 +868,67 @@ static int cmd_mesh(int argc, char **argv) {
   lo.size_min = o.size_min;
   lo.curvature = o.curvature;
   lo.order = o.order;
-  t0 = now();
-  if (o.linear) {
-    /* a given linear mesh (e.g. gmsh's, to compare elevation on one mesh) */
-    progress(&o, "reading %s", o.linear);
-    hoc_mesh *given = NULL;
-    st = hoc_mesh_read_msh(model, o.linear, &given);
-    if (st == HOC_OK && hoc_mesh_order(given) != 1) {
-      st = hoc_mesh_elevate(given, 1, HOC_NODES_EQUISPACED, &lin);
-      hoc_mesh_destroy(&given);
-    } else {
-      lin = given;
-    }
-  } else {
-    progress(&o, "meshing %d faces", hoc_model_num_faces(model));
-    st = hoc_mesh_generate_linear(model, &lo, &lin);
-  }
-  if (st != HOC_OK) {
-    code = fail(st, 1);
-    goto done;
-  }
-  double t_lin = now() - t0;
-  if (hoc_mesh_num_failed_faces(lin)) {
-    int nfail = hoc_mesh_num_failed_faces(lin);
-    fprintf(stderr, "%s: warning: %d face(s) could not be meshed (the rest is processed): faces",
-            program, nfail);
-    for (int i = 0; i < nfail && i < 30; ++i) fprintf(stderr, " %d", hoc_mesh_failed_face_tag(lin, i));
-    fprintf(stderr, "%s\n", nfail > 30 ? " ..." : "");
-  }
-  if ((code = measure_stage(&o, &r, "linear", lin, t_lin, NULL))) goto done;
-  const hoc_mesh *final = lin;
-  if (o.order > 1) {
-    progress(&o, "raising %zu elements to order %d", hoc_mesh_num_elements(lin), o.order);
+  const hoc_mesh *final = NULL;
+  for (;;) {
+    lo.face_size = face_size;
     t0 = now();
-    st = hoc_mesh_elevate(lin, o.order, o.nodes, &ho);
+    if (o.linear) {
+      /* a given linear mesh (e.g. gmsh's, to compare elevation on one mesh) */
+      progress(&o, "reading %s", o.linear);
+      hoc_mesh *given = NULL;
+      st = hoc_mesh_read_msh(model, o.linear, &given);
+      if (st == HOC_OK && hoc_mesh_order(given) != 1) {
+        st = hoc_mesh_elevate(given, 1, HOC_NODES_EQUISPACED, &lin);
+        hoc_mesh_destroy(&given);
+      } else {
+        lin = given;
+      }
+    } else {
+      progress(&o, "meshing %d faces", hoc_model_num_faces(model));
+      st = hoc_mesh_generate_linear(model, &lo, &lin);
+    }
     if (st != HOC_OK) {
-      code = fail(st, 0);
+      code = fail(st, 1);
       goto done;
     }
-    if ((code = measure_stage(&o, &r, "high-order", ho, now() - t0, NULL))) goto done;
-    final = ho;
-  }
-  if (o.optimize && o.order > 1) {
-    /* the raised mesh before optimisation, for the pictures */
-    if ((o.png || o.histogram) && (st = hoc_mesh_elevate(lin, o.order, o.nodes, &raised))) {
-      code = fail(st, 0);
-      goto done;
+    double t_lin = now() - t0;
+    if (hoc_mesh_num_failed_faces(lin)) {
+      int nfail = hoc_mesh_num_failed_faces(lin);
+      fprintf(stderr, "%s: warning: %d face(s) could not be meshed (the rest is processed): faces",
+              program, nfail);
+      for (int i = 0; i < nfail && i < 30; ++i)
+        fprintf(stderr, " %d", hoc_mesh_failed_face_tag(lin, i));
+      fprintf(stderr, "%s\n", nfail > 30 ? " ..." : "");
     }
-    if ((code = optimize_stage(&o, &r, ho))) goto done;
+    if ((code = measure_stage(&o, &r, "linear", lin, t_lin, NULL))) goto done;
+    final = lin;
+    if (o.order > 1) {
+      progress(&o, "raising %zu elements to order %d", hoc_mesh_num_elements(lin), o.order);
+      t0 = now();
+      st = hoc_mesh_elevate(lin, o.order, o.nodes, &ho);
+      if (st != HOC_OK) {
+        code = fail(st, 0);
+        goto done;
+      }
+      if ((code = measure_stage(&o, &r, "high-order", ho, now() - t0, NULL))) goto done;
+      final = ho;
+    }
+    if (o.optimize && o.order > 1) {
+      /* the raised mesh before optimisation, for the pictures */
+      if ((o.png || o.histogram) && (st = hoc_mesh_elevate(lin, o.order, o.nodes, &raised))) {
+        code = fail(st, 0);
+        goto done;
+      }
+      if ((code = optimize_stage(&o, &r, ho))) goto done;
+    }
+    /* elements left tangled: their faces meshed again finer, from the start */
+    if (!o.optimize || o.order < 2 || o.linear || !r.stages[r.n - 1].stats.tangled ||
+        r.refinements >= o.refinements)
+      break;
+    if ((code = refine_faces(&o, &r, model, lin, ho, &face_size))) goto done;
+    hoc_mesh_destroy(&raised);
+    hoc_mesh_destroy(&ho);
+    hoc_mesh_destroy(&lin);
   }
   /* files hold equispaced nodes: measure what is written */
   if (o.nodes != HOC_NODES_EQUISPACED && o.order >= 3 && (out || o.vtu)) {
@@ -887,6 +962,7 @@ static int cmd_mesh(int argc, char **argv) {
   if (!code && hoc_mesh_num_failed_faces(lin)) code = EXIT_PARTIAL;
 done:
   free(q);
+  free(face_size);
   hoc_mesh_destroy(&raised);
   hoc_mesh_destroy(&written);
   hoc_mesh_destroy(&ho);

@@ -137,11 +137,10 @@ done:
   return status;
 }
 
-hoc_status hoc_mesh_generate_linear_gmsh(hoc_model *model, const hoc_linear_options *options,
-                                         hoc_mesh **mesh) {
-  HOC_CHECK(mesh, HOC_ERR_ARGUMENT, "mesh output is NULL");
-  *mesh = NULL;
-  HOC_CHECK(model && model->is_gmsh, HOC_ERR_ARGUMENT, "linear meshing needs a model opened from a CAD file");
+/* One linear mesh with gmsh's current size settings (model and mesh
+ * checked by the caller). */
+static hoc_status generate_once(hoc_model *model, const hoc_linear_options *options,
+                                hoc_mesh **mesh) {
   hoc_linear_options o;
   hoc_linear_options_default(&o);
   if (options) o = *options;
@@ -248,6 +247,67 @@ done:
   free(lines);
   free(line_curve);
   free(failed);
+  return status;
+}
+
+/* Mesh sizes of the refined entities for gmsh's size callback (gmsh 4.8
+ * takes the smaller of the callback's size and its own). */
+typedef struct sizing {
+  int max_face_tag, max_curve_tag;
+  double *face_size, *curve_size; /* [max tag + 1]; 0: no bound */
+} sizing;
+
+static double size_at(int dim, int tag, double x, double y, double z, void *data) {
+  (void)x, (void)y, (void)z;
+  const sizing *s = data;
+  double h = 0;
+  if (dim == 2 && tag >= 0 && tag <= s->max_face_tag) h = s->face_size[tag];
+  if (dim == 1 && tag >= 0 && tag <= s->max_curve_tag) h = s->curve_size[tag];
+  return h > 0 ? h : 1e22;
+}
+
+hoc_status hoc_mesh_generate_linear_gmsh(hoc_model *model, const hoc_linear_options *options,
+                                         hoc_mesh **mesh) {
+  HOC_CHECK(mesh, HOC_ERR_ARGUMENT, "mesh output is NULL");
+  *mesh = NULL;
+  HOC_CHECK(model && model->is_gmsh, HOC_ERR_ARGUMENT,
+            "linear meshing needs a model opened from a CAD file");
+  if (!options || !options->face_size) return generate_once(model, options, mesh);
+  /* faces meshed finer: the bound on the face and on its boundary curves */
+  sizing s = {0};
+  for (int f = 0; f < model->n_faces; ++f) {
+    double h = options->face_size[f];
+    HOC_CHECK(isfinite(h) && h >= 0, HOC_ERR_ARGUMENT,
+              "size bound of face %d must be a finite number >= 0", model->faces[f].tag);
+    if (model->faces[f].tag > s.max_face_tag) s.max_face_tag = model->faces[f].tag;
+  }
+  for (int c = 0; c < model->n_curves; ++c)
+    if (model->curves[c].tag > s.max_curve_tag) s.max_curve_tag = model->curves[c].tag;
+  s.face_size = hoc_calloc((size_t)s.max_face_tag + 1, sizeof *s.face_size);
+  s.curve_size = hoc_calloc((size_t)s.max_curve_tag + 1, sizeof *s.curve_size);
+  hoc_status status = HOC_OK;
+  if (!s.face_size || !s.curve_size) {
+    status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
+    goto done;
+  }
+  for (int f = 0; f < model->n_faces; ++f) {
+    double h = options->face_size[f];
+    if (!(h > 0)) continue;
+    s.face_size[model->faces[f].tag] = h;
+    for (int k = 0; k < model->faces[f].n_curves; ++k) {
+      int t = abs(model->faces[f].curves[k]);
+      if (t <= s.max_curve_tag && (!(s.curve_size[t] > 0) || h < s.curve_size[t]))
+        s.curve_size[t] = h;
+    }
+  }
+  int ierr = 0;
+  gmshModelMeshSetSizeCallback(size_at, &s, &ierr);
+  status = ierr ? HOC_ERROR(HOC_ERR_MESH, "gmsh refused the mesh size callback")
+                : generate_once(model, options, mesh);
+  gmshModelMeshRemoveSizeCallback(&ierr);
+done:
+  free(s.face_size);
+  free(s.curve_size);
   return status;
 }
 

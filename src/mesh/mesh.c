@@ -79,6 +79,28 @@ int hoc_mesh_element_face_tag(const hoc_mesh *mesh, size_t e) {
   return mesh && e < mesh->n_elems ? mesh->model->faces[mesh->elem_face[e]].tag : -1;
 }
 
+hoc_status hoc_mesh_refine_bounds(const hoc_mesh *mesh, const unsigned char *elements,
+                                  double factor, double *face_size) {
+  HOC_CHECK(mesh && elements && face_size, HOC_ERR_ARGUMENT, "refine bounds: missing argument");
+  HOC_CHECK(factor > 0 && factor < 1, HOC_ERR_ARGUMENT, "refine factor %g is not in (0, 1)",
+            factor);
+  for (size_t e = 0; e < mesh->n_elems; ++e) {
+    if (!elements[e]) continue;
+    /* longest straight edge between the element's corners */
+    const size_t *c = mesh->conn + e * (size_t)mesh->np;
+    double len = 0;
+    for (int k = 0; k < 3; ++k) {
+      const double *a = mesh->xyz + 3 * c[k], *b = mesh->xyz + 3 * c[(k + 1) % 3];
+      double d2 = 0;
+      for (int i = 0; i < 3; ++i) d2 += (b[i] - a[i]) * (b[i] - a[i]);
+      len = fmax(len, sqrt(d2));
+    }
+    double h = factor * len, *bound = &face_size[mesh->elem_face[e]];
+    if (h > 0 && (!(*bound > 0) || h < *bound)) *bound = h;
+  }
+  return HOC_OK;
+}
+
 /* Nodes grouped by entity: order[] lists node indices, start[e]..start[e+1]
  * those on entity e of dimension `dim`. */
 static hoc_status group_nodes(const hoc_mesh *m, int dim, int n_entities, size_t **start_out,

@@ -112,6 +112,7 @@ typedef struct opt {
   unsigned char *active;/* [n_nodes] */
   double min_gain;      /* per node: a step that lowers f by less puts the block to sleep */
   double eps;           /* regularisation scale of tangled elements (relative to their size) */
+  int relax_uv;         /* second attempt: relaxed elements may fold in (u, v) too */
   double wake_factor;   /* a move must gain this many times min_gain to wake its neighbours */
   unsigned char *moving;/* [n_nodes] use the trial state of this node */
   /* trial state */
@@ -1097,10 +1098,25 @@ static int line_monotone(const opt *o, size_t l) {
   return 1;
 }
 
+/* Sweeps without a new fewest tangled count that end an attempt. */
+#define STALL_SWEEPS 40
+
 /* While untangling stalls (a raised regularisation), the valid neighbours
  * of tangled elements may pass through sigma = 0 for a while: some folds
  * only open by moving their neighbourhood through an invalid state. */
 static int relaxed(const opt *o, size_t e) { return o->region[e] && o->eps > 2e-3; }
+
+/* In the second attempt (relax_uv), relaxed elements on a face's boundary
+ * may also fold in (u, v): on a regular parametrisation that is the same
+ * fold as in 3D, and the (u, v) rule would otherwise hold them where the 3D
+ * rule lets go. Not on faces with a pole, where (u, v) folds without the
+ * surface folding. Only in a second attempt: from the start it can trade one
+ * fold for several (t20 at order 10 ends with 12 instead of 0). */
+static int relaxed_uv(const opt *o, size_t e) {
+  if (!o->relax_uv || !relaxed(o, e)) return 0;
+  const hoc_cad_face *f = &o->model->faces[o->m->elem_face[e]];
+  return !(f->pole[0] || f->pole[1] || f->pole[2] || f->pole[3]);
+}
 
 /* Local objective of block b at its trial (nodes flagged moving); 0 if the
  * trial breaks a rule. */
@@ -1116,7 +1132,8 @@ static int block_trial_flagged(const opt *o, size_t b, scratch *s, double fmax, 
   for (size_t a = o->B->be_start[b]; a < o->B->be_start[b + 1]; ++a) {
     size_t e = o->B->be_elem[a];
     gather(o, e, s->x, s->n);
-    if (o->pvalid[e] && o->on_boundary[e] && !param_valid(o, e, s->uv)) return 0;
+    if (o->pvalid[e] && o->on_boundary[e] && !relaxed_uv(o, e) && !param_valid(o, e, s->uv))
+      return 0;
     double smin;
     int nr = elem_residuals(o, e, s->x, s->n, s->r, NULL, &smin);
     if (o->valid[e] && !relaxed(o, e) && !(smin > 0)) return 0;
@@ -1488,9 +1505,29 @@ hoc_status hoc_mesh_optimize(hoc_mesh *mesh, const hoc_optimize_options *options
   res.tangled_initial = tangled;
   size_t fewest = tangled; /* and res.best_iteration = 0: when it was reached */
   if (tangled) HOC_TRY_GOTO(snapshot_take(&best, mesh, tangled, f), done);
-  int stalled = 0;
+  /* last: the last sweep of this attempt; since: the sweep before the
+   * mesh's run of untangled sweeps (or the second attempt) began */
+  int stalled = 0, last = o.max_iterations, since = 0;
+  int fell = 0; /* the last sweep of this attempt with a new fewest tangled */
   double hist_f[11], hist_q[11];
-  for (int it = 1; it <= o.max_iterations; ++it) {
+  for (int it = 1;; ++it) {
+    if (it > last) {
+      /* still tangled when the sweeps run out (or nothing moves): a second
+       * attempt of half as many sweeps from the best state reached, with
+       * the (u, v) rule relaxed too (relaxed_uv) */
+      if (!tangled || ctx.relax_uv || best.tangled == SIZE_MAX) break;
+      snapshot_restore(&best, mesh);
+      HOC_TRY_GOTO(eval_all(&ctx), done);
+      ctx.relax_uv = 1;
+      ctx.eps = 1e-3;
+      stalled = 0;
+      since = fell = it - 1;
+      last = it - 1 + (o.max_iterations + 1) / 2;
+      memset(ctx.dirty, 1, mesh->n_elems);
+      wake_all(&ctx);
+      HOC_TRY_GOTO(sweep_start(&ctx, &f, &qmin, &tangled), done);
+      res.second_attempt = it;
+    }
     size_t moved = 0;
     /* nodes near tangled elements and nodes of poor elements (q below half
      * the mean: those that set the mesh's worst quality) never sleep */
@@ -1534,8 +1571,11 @@ hoc_status hoc_mesh_optimize(hoc_mesh *mesh, const hoc_optimize_options *options
     res.iterations = it;
     if (tangled < fewest) {
       fewest = tangled;
-      res.best_iteration = it;
+      res.best_iteration = fell = it;
     }
+    /* no new fewest for STALL_SWEEPS sweeps: this attempt ends (the count
+     * has been seen to fall again after 32 on t20 at order 10) */
+    if (tangled && it - fell >= STALL_SWEEPS && it < last) last = it;
     if (tangled && tangled < best.tangled)
       HOC_TRY_GOTO(snapshot_take(&best, mesh, tangled, f), done);
     /* untangling that stalls: a smoother regularised landscape (larger
@@ -1568,13 +1608,21 @@ hoc_status hoc_mesh_optimize(hoc_mesh *mesh, const hoc_optimize_options *options
     for (size_t i = 0; i < mesh->n_nodes; ++i) active += ctx.active[i];
     if (!active || !moved) {
       res.converged = tangled == 0;
+      if (tangled && !ctx.relax_uv) {
+        last = it; /* the second attempt */
+        continue;
+      }
       break;
     }
-    /* stagnation: untangled, and over the last 10 sweeps f fell by less
-     * than 5% and the worst element gained less than 0.005 */
+    /* stagnation: untangled for the last 10 sweeps, over which f fell by
+     * less than 5% and the worst element gained less than 0.005 (compared
+     * with a tangled sweep, f is regularised and q is 0: no measure of
+     * progress) */
     hist_f[it % 11] = f;
     hist_q[it % 11] = qmin;
-    if (tangled == 0 && it > 10 && hist_f[(it - 10) % 11] - f < 0.05 * hist_f[(it - 10) % 11] &&
+    if (tangled) since = it;
+    if (tangled == 0 && it - since > 10 &&
+        hist_f[(it - 10) % 11] - f < 0.05 * hist_f[(it - 10) % 11] &&
         qmin - hist_q[(it - 10) % 11] < 0.005) {
       res.converged = 1;
       break;
