@@ -263,8 +263,9 @@ typedef struct hoc_optimize_options {
                              early the same way */
   double tolerance;     /**< a node whose move lowers f by less than tolerance * f / (free
                              nodes) goes to sleep; the optimisation ends when every node
-                             sleeps, or when, with no tangled element, ten sweeps lowered f
-                             by less than 5% and raised the smallest q by less than 0.005
+                             sleeps, or when the last ten sweeps, all without a tangled
+                             element, lowered f by less than 5% and raised the smallest q
+                             by less than 0.005
                              (0: 0.1) */
   hoc_optimize_progress_fn progress;
   void *progress_user;
