@@ -247,6 +247,7 @@ typedef struct hoc_optimize_iteration {
   size_t tangled;     /**< tangled elements */
   size_t moved;       /**< nodes moved in this sweep */
   double seconds;     /**< since the start */
+  int attempt;        /**< 1, or 2 in the second attempt (hoc_optimize_options.max_iterations) */
 } hoc_optimize_iteration;
 
 /** Called after each iteration; return nonzero to stop (HOC_ERR_INTERRUPTED). */

@@ -241,12 +241,16 @@ static void test_cusp(void) {
  * returns the state with the fewest, as measured afresh. */
 typedef struct tangle_log {
   size_t count[16];
+  int attempt[16];
   int n;
 } tangle_log;
 
 static int log_tangled(void *user, const hoc_optimize_iteration *it) {
   tangle_log *l = user;
-  if (l->n < 16) l->count[l->n++] = it->tangled;
+  if (l->n < 16) {
+    l->attempt[l->n] = it->attempt;
+    l->count[l->n++] = it->tangled;
+  }
   return 0;
 }
 
@@ -259,7 +263,7 @@ static void test_best_state_kept(void) {
   lo.order = 6; /* the linear mesh hocad mesh --order 6 makes */
   CHECK_OK(hoc_mesh_generate_linear(model, &lo, &lin));
   CHECK_OK(hoc_mesh_elevate(lin, 6, HOC_NODES_EQUISPACED, &m));
-  tangle_log log = {{0}, 0};
+  tangle_log log = {{0}, {0}, 0};
   hoc_optimize_options o;
   hoc_optimize_options_default(&o);
   o.max_iterations = 10;
@@ -271,6 +275,7 @@ static void test_best_state_kept(void) {
    * state of the first (the whole run's fewest is returned) */
   CHECK(res.second_attempt == 11);
   CHECK(log.n > 10 && log.n <= 15 && res.iterations == log.n);
+  for (int i = 0; i < log.n; ++i) CHECK(log.attempt[i] == (i < 10 ? 1 : 2));
   size_t fewest = res.tangled_initial, fewest_first = fewest;
   int rose = 0;
   for (int i = 0; i < log.n; ++i) {

@@ -1598,7 +1598,7 @@ hoc_status hoc_mesh_optimize(hoc_mesh *mesh, const hoc_optimize_options *options
       stalled = 0;
     }
     if (o.progress) {
-      hoc_optimize_iteration info = {it, f, qmin, tangled, moved, now() - t0};
+      hoc_optimize_iteration info = {it, f, qmin, tangled, moved, now() - t0, 1 + ctx.relax_uv};
       if (o.progress(o.progress_user, &info)) {
         status = HOC_ERROR(HOC_ERR_INTERRUPTED, "optimisation interrupted");
         goto done;
