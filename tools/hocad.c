@@ -591,7 +591,8 @@ static int iteration_line(void *user, const hoc_optimize_iteration *it) {
   const options *o = user;
   if (!o->quiet && isatty(STDERR_FILENO))
     fprintf(stderr,
-            "[hocad] iteration %3d: objective %.6g, min q %.4f, %zu tangled, %zu nodes moved (%.1f s)%s\n",
+            "[hocad] iteration %3d: objective %.6g, min q %.4f, %zu tangled, %zu nodes moved "
+            "(%.1f s)%s\n",
             it->iteration, it->objective, it->min_q, it->tangled, it->moved, it->seconds,
             it->attempt == 2 ? ", second attempt" : "");
   return 0;
