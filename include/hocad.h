@@ -283,6 +283,9 @@ typedef struct hoc_optimize_result {
                              first reached (0: the start); long before `iterations`
                              when untangling stalled */
   int second_attempt;   /**< first sweep of the second attempt (0: none was needed) */
+  int stopped_at_limit; /**< elements were still tangled when the last attempt had used all
+                             its sweeps (not ended early by the 40-sweep stall rule or by
+                             every node sleeping) */
   size_t free_nodes;    /**< nodes the optimiser could move */
   double seconds;
 } hoc_optimize_result;

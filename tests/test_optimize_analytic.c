@@ -85,7 +85,7 @@ static void check_kind(hoc_analytic_kind kind, double a, double b, int nu, int n
          before.tangled, after.tangled, before.min, after.min, r.iterations);
   CHECK(after.tangled == 0);
   CHECK(r.tangled_final == 0 && r.tangled_initial == before.tangled);
-  CHECK(r.second_attempt == 0); /* untangled in the first */
+  CHECK(r.second_attempt == 0 && !r.stopped_at_limit); /* untangled in the first */
   CHECK(after.min > 0.3);
   CHECK_OK(hoc_mesh_check_gradient(m, HOC_MEASURE_SHAPE, 0, 50, &gerr));
   CHECK(gerr < 1e-6);
@@ -184,6 +184,7 @@ static void check_second_attempt(void) {
   CHECK(r.tangled_initial > 0);
   CHECK(r.tangled_final > 0 ? r.second_attempt == 3 && r.iterations == 3 : r.second_attempt == 0);
   CHECK(r.second_attempt > 0); /* this mesh needs more than two sweeps */
+  CHECK(r.stopped_at_limit == (r.tangled_final > 0)); /* both attempts used their sweeps */
   CHECK(r.tangled_final <= r.tangled_initial);
   hoc_quality_stats st;
   CHECK_OK(hoc_mesh_measure(m, HOC_MEASURE_SHAPE, NULL, NULL, &st));

@@ -424,7 +424,7 @@ typedef struct stage {
   double seconds; /* to produce the stage */
   int optimized;  /* the fields below are set */
   int iterations, converged;
-  int stopped_at_limit; /* the optimiser ran out of iterations */
+  int stopped_at_limit; /* the optimiser ran out of sweeps with elements tangled */
   int best_iteration;   /* when the returned mesh's tangled count was first reached */
   int second_attempt;   /* first sweep of the optimiser's second attempt, or 0 */
   double objective_initial, objective;
@@ -625,7 +625,7 @@ static int optimize_stage(const options *o, report *r, hoc_mesh *mesh) {
   s->optimized = 1;
   s->iterations = res.iterations;
   s->converged = res.converged;
-  s->stopped_at_limit = res.iterations >= oo.max_iterations;
+  s->stopped_at_limit = res.stopped_at_limit;
   s->best_iteration = res.best_iteration;
   s->second_attempt = res.second_attempt;
   s->objective_initial = res.objective_initial;

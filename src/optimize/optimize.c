@@ -1509,19 +1509,24 @@ hoc_status hoc_mesh_optimize(hoc_mesh *mesh, const hoc_optimize_options *options
    * mesh's run of untangled sweeps (or the second attempt) began */
   int stalled = 0, last = o.max_iterations, since = 0;
   int fell = 0; /* the last sweep of this attempt with a new fewest tangled */
+  int cut = 0;  /* this attempt was ended before its sweeps ran out */
   double hist_f[11], hist_q[11];
   for (int it = 1;; ++it) {
     if (it > last) {
       /* still tangled when the sweeps run out (or nothing moves): a second
        * attempt of half as many sweeps from the best state reached, with
        * the (u, v) rule relaxed too (relaxed_uv) */
-      if (!tangled || ctx.relax_uv || best.tangled == SIZE_MAX) break;
+      if (!tangled || ctx.relax_uv || best.tangled == SIZE_MAX) {
+        res.stopped_at_limit = tangled && !cut;
+        break;
+      }
       snapshot_restore(&best, mesh);
       HOC_TRY_GOTO(eval_all(&ctx), done);
       ctx.relax_uv = 1;
       ctx.eps = 1e-3;
       stalled = 0;
       since = fell = it - 1;
+      cut = 0;
       last = it - 1 + (o.max_iterations + 1) / 2;
       memset(ctx.dirty, 1, mesh->n_elems);
       wake_all(&ctx);
@@ -1575,7 +1580,10 @@ hoc_status hoc_mesh_optimize(hoc_mesh *mesh, const hoc_optimize_options *options
     }
     /* no new fewest for STALL_SWEEPS sweeps: this attempt ends (the count
      * has been seen to fall again after 32 on t20 at order 10) */
-    if (tangled && it - fell >= STALL_SWEEPS && it < last) last = it;
+    if (tangled && it - fell >= STALL_SWEEPS && it < last) {
+      last = it;
+      cut = 1;
+    }
     if (tangled && tangled < best.tangled)
       HOC_TRY_GOTO(snapshot_take(&best, mesh, tangled, f), done);
     /* untangling that stalls: a smoother regularised landscape (larger
@@ -1610,6 +1618,7 @@ hoc_status hoc_mesh_optimize(hoc_mesh *mesh, const hoc_optimize_options *options
       res.converged = tangled == 0;
       if (tangled && !ctx.relax_uv) {
         last = it; /* the second attempt */
+        cut = 1;
         continue;
       }
       break;
