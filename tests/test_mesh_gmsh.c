@@ -373,7 +373,93 @@ static void test_refine_faces(void) {
   hoc_model_destroy(&model);
 }
 
+/* Face nodes used by an element of another face (each face must have its own). */
+static size_t foreign_nodes(const hoc_mesh *m) {
+  size_t n = 0;
+  for (size_t e = 0; e < m->n_elems; ++e)
+    for (int k = 0; k < m->np; ++k) {
+      size_t i = m->conn[e * (size_t)m->np + k];
+      n += m->dim[i] == HOC_ON_FACE && m->entity[i] != m->elem_face[e];
+    }
+  return n;
+}
+
+/* Corner edges on no CAD curve that elements of two faces share. */
+static size_t edges_shared_by_faces(const hoc_mesh *m) {
+  size_t n = 0, np = (size_t)m->np;
+  for (size_t e1 = 0; e1 < m->n_elems; ++e1)
+    for (size_t e2 = e1 + 1; e2 < m->n_elems; ++e2) {
+      if (m->elem_face[e1] == m->elem_face[e2]) continue;
+      for (int k = 0; k < 3; ++k) {
+        size_t a = m->conn[e1 * np + (size_t)k], b = m->conn[e1 * np + (size_t)(k + 1) % 3];
+        int in2 = 0, line = 0;
+        for (int j = 0; j < 3; ++j)
+          in2 += m->conn[e2 * np + (size_t)j] == a || m->conn[e2 * np + (size_t)j] == b;
+        for (size_t l = 0; l < m->n_lines; ++l) {
+          const size_t *ln = m->line_conn + l * (size_t)(m->order + 1);
+          line |= (ln[0] == a && ln[1] == b) || (ln[0] == b && ln[1] == a);
+        }
+        n += in2 == 2 && !line;
+      }
+    }
+  return n;
+}
+
+/* Two faces bounded by the same four curves whose triangulations share an
+ * edge on no curve: each face gets its own high-order nodes on that edge.
+ * gmsh (4.8 and 5.0) makes one node there, on the first face, as it does
+ * on D150_aircraft_fused.brep; hocad's elevation did the same before. */
+static void test_two_faces_one_edge(void) {
+  char path[1024];
+  snprintf(path, sizeof path, "%s/tests/data/two_faces_same_curves.brep", HOC_SOURCE_DIR);
+  hoc_model *model = NULL;
+  CHECK_OK(hoc_model_open(path, &model));
+  if (!model) return;
+  CHECK(model->n_faces == 2);
+  snprintf(path, sizeof path, "%s/tests/data/two_faces_gmsh48_p2.msh", HOC_SOURCE_DIR);
+  hoc_mesh *g = NULL;
+  CHECK_OK(hoc_mesh_read_msh(model, path, &g));
+  if (g) {
+    /* the file has 97 nodes; node 38 of face 1 gets a copy on face 2 */
+    printf("gmsh 4.8 mesh read: %zu nodes, %zu face nodes of another face\n", g->n_nodes,
+           foreign_nodes(g));
+    CHECK(g->n_nodes == 98);
+    CHECK(foreign_nodes(g) == 0);
+    hoc_quality_stats st;
+    CHECK_OK(hoc_mesh_measure(g, HOC_MEASURE_SHAPE, NULL, NULL, &st));
+    CHECK(st.tangled == 0);
+  }
+  hoc_mesh_destroy(&g);
+  /* hocad's own pipeline with edges long enough for such a shared edge */
+  hoc_linear_options lo;
+  hoc_linear_options_default(&lo);
+  lo.size_max = 10;
+  hoc_mesh *lin = NULL, *m = NULL;
+  CHECK_OK(hoc_mesh_generate_linear(model, &lo, &lin));
+  if (lin) {
+    size_t shared = edges_shared_by_faces(lin);
+    printf("linear mesh: %zu elements; element pairs of the two faces sharing an edge on no curve: "
+           "%zu\n",
+           lin->n_elems, shared);
+    CHECK(shared > 0);
+    CHECK_OK(hoc_mesh_elevate(lin, 3, HOC_NODES_EQUISPACED, &m));
+  }
+  if (m) {
+    CHECK(foreign_nodes(m) == 0);
+    double dist;
+    CHECK_OK(hoc_mesh_max_cad_distance(m, &dist));
+    CHECK(dist <= 1e-10 * model->diagonal);
+    hoc_quality_stats st;
+    CHECK_OK(hoc_mesh_measure(m, HOC_MEASURE_SHAPE, NULL, NULL, &st));
+    CHECK(st.tangled == 0);
+  }
+  hoc_mesh_destroy(&m);
+  hoc_mesh_destroy(&lin);
+  hoc_model_destroy(&model);
+}
+
 int main(void) {
+  test_two_faces_one_edge();
   test_refine_faces();
   test_best_state_kept();
   test_cusp();

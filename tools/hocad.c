@@ -642,7 +642,10 @@ static const stage *optimized_stage(const report *r) {
 
 /* Where tangled elements remain: say which, and why (on stderr). `opt` is
  * the optimised stage, or NULL if the mesh was not optimised. */
-static void report_tangled(const hoc_mesh *mesh, const double *q, const stage *opt) {
+static void report_tangled(const hoc_mesh *mesh, const double *q, const stage *opt, int from_cad) {
+  /* `hocad mesh` can make a finer linear mesh; `optimize` keeps its input's */
+  const char *advice = from_cad ? "try a smaller --size or a larger --curvature"
+                                : "its corners allow no valid curved element: mesh finer there";
   size_t ne = hoc_mesh_num_elements(mesh), shown = 0, total = 0;
   for (size_t e = 0; e < ne; ++e) total += q[e] == 0.0;
   if (!total) return;
@@ -650,16 +653,18 @@ static void report_tangled(const hoc_mesh *mesh, const double *q, const stage *o
       2 * opt->best_iteration <= opt->iterations)
     fprintf(stderr,
             "%s: warning: %zu element(s) could not be untangled with this linear mesh (the fewest "
-            "tangled since iteration %d of %d; try a smaller --size or a larger --curvature):",
-            program, total, opt->best_iteration, opt->iterations);
+            "tangled since iteration %d of %d; %s):",
+            program, total, opt->best_iteration, opt->iterations, advice);
   else if (opt && !opt->converged && opt->stopped_at_limit)
     fprintf(stderr,
             "%s: warning: %zu element(s) still tangled after %d iteration(s) (the limit, with a "
             "second attempt: raise --max-iterations):",
             program, total, opt->iterations);
   else if (opt)
-    fprintf(stderr, "%s: warning: %zu element(s) could not be untangled with this linear mesh "
-                    "(try a smaller --size or a larger --curvature):", program, total);
+    fprintf(stderr,
+            "%s: warning: %zu element(s) could not be untangled with this linear mesh "
+            "(%s):",
+            program, total, advice);
   else
     fprintf(stderr, "%s: warning: %zu tangled element(s) (not optimized):", program, total);
   for (size_t e = 0; e < ne && shown < 20; ++e)
@@ -959,7 +964,7 @@ static int cmd_mesh(int argc, char **argv) {
     int n = o.order == 1 ? 1 : raised ? 3 : 2;
     if ((code = write_pictures(&o, n, stages, final, q))) goto done;
   }
-  report_tangled(final, q, optimized_stage(&r));
+  report_tangled(final, q, optimized_stage(&r), 1);
   if (o.optimize && o.order > 1) report_cusps(&r, final, q);
   if (r.stages[r.n - 1].stats.tangled) code = EXIT_TANGLED;
   if (!code && hoc_mesh_num_failed_faces(lin)) code = EXIT_PARTIAL;
@@ -1147,7 +1152,7 @@ static int cmd_optimize(int argc, char **argv) {
   if ((code = write_outputs(&o, mesh, q, o.out))) goto done;
   r.nodes = hoc_mesh_num_nodes(mesh);
   if (o.json && (code = write_json(o.json, &o, &r, "optimize"))) goto done;
-  report_tangled(mesh, q, optimized_stage(&r));
+  report_tangled(mesh, q, optimized_stage(&r), 0);
   if (r.stages[r.n - 1].stats.tangled) code = EXIT_TANGLED;
 done:
   free(q);

@@ -3,6 +3,7 @@
  * placed in the curve's parameter, then mapped onto the CAD.
  * SPDX-License-Identifier: GPL-2.0-or-later */
 #include "basis/basis.h"
+#include "core/hash.h"
 #include "mesh/mesh.h"
 
 #include <math.h>
@@ -122,6 +123,40 @@ static hoc_status edge_table_build(edge_table *t, const size_t *conn, size_t ne,
   return HOC_OK;
 }
 
+/* An edge on no CAD curve that elements of two faces share (two faces
+ * bounded by the same two curves, each meshed there without a vertex
+ * inside) gets its own number on each further face, so that each face
+ * makes its own nodes on it: a node lies on one face. */
+static hoc_status split_face_edges(const hoc_mesh *in, edge_table *t, const size_t *edge_line,
+                                   size_t *elem_edge, unsigned char *edge_new) {
+  size_t n0 = t->n_edges;
+  int *owner = hoc_realloc(NULL, n0 + 1, sizeof *owner);
+  if (!owner) return HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
+  hoc_hash h = {0};
+  hoc_status status = HOC_OK;
+  for (size_t id = 0; id < n0; ++id)
+    owner[id] = -1;
+  uint64_t nf = (uint64_t)in->model->n_faces;
+  for (size_t x = 0; x < 3 * in->n_elems; ++x) {
+    size_t id = elem_edge[x];
+    int f = in->elem_face[x / 3];
+    if (edge_line[id] != SIZE_MAX) continue;
+    if (owner[id] < 0) owner[id] = f; /* the first element using it */
+    if (owner[id] == f) continue;
+    if (!h.slots) HOC_TRY_GOTO(hoc_hash_init(&h, 16), done);
+    int found;
+    HOC_TRY_GOTO(
+        hoc_hash_insert(&h, (uint64_t)id * nf + (uint64_t)f, t->n_edges, &found, &elem_edge[x]),
+        done);
+    edge_new[x] = !found;
+    t->n_edges += !found;
+  }
+done:
+  hoc_hash_free(&h);
+  free(owner);
+  return status;
+}
+
 /* Re-interpolation: the new mesh of order p on node set `set` evaluates
  * each source element's parametric map at the new reference nodes. Nodes
  * on CAD curves are interpolated in the curve's parameter t along the edge;
@@ -166,19 +201,21 @@ static hoc_status reinterpolate(const hoc_mesh *in, int p, hoc_nodeset set, hoc_
   HOC_ALLOC_GOTO(elem_edge, 3 * ne, done);
   HOC_ALLOC_GOTO(edge_new, 3 * ne, done);
   HOC_TRY_GOTO(edge_table_build(&edges, in->conn, ne, npi, in->n_nodes, elem_edge, edge_new), done);
-  /* corners (at most the source's nodes), edge nodes, interior nodes */
-  HOC_TRY_GOTO(builder_reserve(&b, in->n_nodes + edges.n_edges * (size_t)(p - 1) +
-                                       ne * (size_t)(np - 3 * p)),
-               done);
-  /* the source line (CAD curve edge) on each edge, the first if several */
-  HOC_ALLOC_GOTO(edge_line, edges.n_edges + 1, done);
-  for (size_t id = 0; id < edges.n_edges; ++id)
+  /* the source line (CAD curve edge) on each edge, the first if several
+   * (room for the split edges below: at most one per element edge) */
+  HOC_ALLOC_GOTO(edge_line, 3 * ne + 1, done);
+  for (size_t id = 0; id < 3 * ne + 1; ++id)
     edge_line[id] = SIZE_MAX;
   for (size_t l = 0; l < in->n_lines; ++l) {
     const size_t *ln = in->line_conn + l * (size_t)(pin + 1);
     size_t x = edge_entry(&edges, ln[0], ln[1]);
     if (x != SIZE_MAX && edge_line[edges.id[x]] == SIZE_MAX) edge_line[edges.id[x]] = l;
   }
+  HOC_TRY_GOTO(split_face_edges(in, &edges, edge_line, elem_edge, edge_new), done);
+  /* corners (at most the source's nodes), edge nodes, interior nodes */
+  HOC_TRY_GOTO(builder_reserve(&b, in->n_nodes + edges.n_edges * (size_t)(p - 1) +
+                                       ne * (size_t)(np - 3 * p)),
+               done);
   /* vertices keep their classification and parameters */
   for (size_t e = 0; e < ne; ++e)
     for (int k = 0; k < 3; ++k) {

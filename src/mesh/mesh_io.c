@@ -1,6 +1,7 @@
 /* hoc_mesh to and from files: MSH 4.1 (with CAD entities and parametric
  * coordinates) and VTU.
  * SPDX-License-Identifier: GPL-2.0-or-later */
+#include "core/hash.h"
 #include "io/io.h"
 #include "mesh/mesh.h"
 
@@ -164,6 +165,71 @@ done:
   return status;
 }
 
+/* A node on face A that triangles of face B also use (gmsh 5.0 does this
+ * where two faces' triangulations share an edge that is on no CAD curve,
+ * e.g. two faces bounded by the same two curves: its high-order edge node
+ * is made once, on the first face) gets a copy on face B, without
+ * parameters, so that it is located on B like any node the file gives no
+ * parameters. Grows the raw arrays and dim/ent; *n_copies is how many. */
+static hoc_status own_face_nodes(const hoc_model *model, hoc_msh_raw *raw, const int *tface,
+                                 signed char **dim, int **ent, size_t *n_copies) {
+  *n_copies = 0;
+  size_t np = (size_t)(raw->order + 1) * (size_t)(raw->order + 2) / 2, n = raw->n_nodes, extra = 0;
+  for (size_t e = 0; e < raw->n_tris; ++e)
+    for (size_t k = 0; k < np; ++k) {
+      size_t i = raw->tri_nodes[e * np + k];
+      extra += (*dim)[i] == HOC_ON_FACE && (*ent)[i] != tface[e];
+    }
+  if (!extra) return HOC_OK;
+  hoc_hash h = {0};
+  HOC_TRY(hoc_hash_init(&h, extra));
+  hoc_status status = HOC_OK;
+  uint64_t nf = (uint64_t)model->n_faces;
+  size_t m = n;
+  for (size_t e = 0; e < raw->n_tris; ++e)
+    for (size_t k = 0; k < np; ++k) {
+      size_t *i = &raw->tri_nodes[e * np + k], s;
+      if ((*dim)[*i] != HOC_ON_FACE || (*ent)[*i] == tface[e]) continue;
+      HOC_TRY_GOTO(hoc_hash_insert(&h, (uint64_t)*i * nf + (uint64_t)tface[e], m, NULL, &s), done);
+      m += s == m;
+    }
+  size_t *tag = hoc_realloc(raw->node_tag, m, sizeof *tag);
+  if (tag) raw->node_tag = tag;
+  double *xyz = hoc_realloc(raw->xyz, 3 * m, sizeof *xyz);
+  if (xyz) raw->xyz = xyz;
+  double *par = hoc_realloc(raw->param, 2 * m, sizeof *par);
+  if (par) raw->param = par;
+  unsigned char *has = hoc_realloc(raw->has_param, m, 1);
+  if (has) raw->has_param = has;
+  signed char *d2 = hoc_realloc(*dim, m, 1);
+  if (d2) *dim = d2;
+  int *e2 = hoc_realloc(*ent, m, sizeof *e2);
+  if (e2) *ent = e2;
+  if (!tag || !xyz || !par || !has || !d2 || !e2) {
+    status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
+    goto done;
+  }
+  /* raw's per-node arrays other than these are not used past this point */
+  for (size_t e = 0; e < raw->n_tris; ++e)
+    for (size_t k = 0; k < np; ++k) {
+      size_t *i = &raw->tri_nodes[e * np + k];
+      if ((*dim)[*i] != HOC_ON_FACE || (*ent)[*i] == tface[e]) continue;
+      size_t c = hoc_hash_get(&h, (uint64_t)*i * nf + (uint64_t)tface[e]);
+      raw->node_tag[c] = raw->node_tag[*i];
+      memcpy(raw->xyz + 3 * c, raw->xyz + 3 * *i, 3 * sizeof *raw->xyz);
+      raw->param[2 * c] = raw->param[2 * c + 1] = 0;
+      raw->has_param[c] = 0;
+      (*dim)[c] = HOC_ON_FACE;
+      (*ent)[c] = tface[e];
+      *i = c;
+    }
+  raw->n_nodes = m;
+  *n_copies = m - n;
+done:
+  hoc_hash_free(&h);
+  return status;
+}
+
 hoc_status hoc_mesh_read_msh(hoc_model *model, const char *path, hoc_mesh **mesh) {
   HOC_CHECK(mesh, HOC_ERR_ARGUMENT, "mesh output is NULL");
   *mesh = NULL;
@@ -206,6 +272,8 @@ hoc_status hoc_mesh_read_msh(hoc_model *model, const char *path, hoc_mesh **mesh
       goto done;
     }
   }
+  size_t n_copies;
+  HOC_TRY_GOTO(own_face_nodes(model, &raw, tface, &dim, &ent, &n_copies), done);
   size_t nl = 0;
   HOC_ALLOC_GOTO(lconn, raw.n_lines * (size_t)(raw.order + 1) + 1, done);
   HOC_ALLOC_GOTO(lcurve, raw.n_lines + 1, done);
