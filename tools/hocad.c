@@ -644,8 +644,9 @@ static const stage *optimized_stage(const report *r) {
  * the optimised stage, or NULL if the mesh was not optimised. */
 static void report_tangled(const hoc_mesh *mesh, const double *q, const stage *opt, int from_cad) {
   /* `hocad mesh` can make a finer linear mesh; `optimize` keeps its input's */
-  const char *advice = from_cad ? "try a smaller --size or a larger --curvature"
-                                : "its corners allow no valid curved element: mesh finer there";
+  const char *advice = from_cad
+                           ? "try a smaller --size or a larger --curvature"
+                           : "not with the input's elements: a finer input mesh there may help";
   size_t ne = hoc_mesh_num_elements(mesh), shown = 0, total = 0;
   for (size_t e = 0; e < ne; ++e) total += q[e] == 0.0;
   if (!total) return;
