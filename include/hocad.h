@@ -217,6 +217,17 @@ int hoc_mesh_element_face_tag(const hoc_mesh *mesh, size_t e);
 hoc_status hoc_mesh_refine_bounds(const hoc_mesh *mesh, const unsigned char *elements,
                                   double factor, double *face_size);
 
+/** Local refinement: each flagged element split in four at the midpoints
+ *  of its edges, its neighbours in two (one split edge: through the
+ *  midpoint and the opposite corner) or four (more), so that the mesh stays
+ *  conforming. The new elements' nodes are placed as hoc_mesh_elevate
+ *  places them, straight between their corners in the parent's (u, v) (in
+ *  the curve's t on curve edges; midpoints halfway); elements not split
+ *  keep all their nodes. Same order and node set as the input.
+ *  @param[in]  elements  per-element flag (e.g. tangled from hoc_mesh_measure)
+ *  @param[out] out       the new mesh (NULL on failure) */
+hoc_status hoc_mesh_split(const hoc_mesh *mesh, const unsigned char *elements, hoc_mesh **out);
+
 /** A corner of an element at a CAD vertex where both of the element's
  *  edges lie on CAD curves that meet there at a small angle (a cusp of the
  *  model). The element follows both curves, so as the order grows its

@@ -177,7 +177,132 @@ static void test_derivatives(void) {
   }
 }
 
+/* Distance between two parameter pairs, modulo the face's periods. */
+static double uv_gap(const hoc_cad_face *f, const double *a, const double *b) {
+  double g = 0;
+  for (int d = 0; d < 2; ++d) {
+    double x = a[d] - b[d];
+    if (f->period[d] > 0) x -= f->period[d] * floor(x / f->period[d] + 0.5);
+    g = fmax(g, fabs(x));
+  }
+  return g;
+}
+
+/* Local refinement on the torus (two seams; every edge has two elements):
+ * each of two flagged elements split in four, their three neighbours in
+ * two; the mesh conforming (every corner edge in two elements, with the
+ * same high-order nodes), the elements not split unchanged, the new ones
+ * straight in (u, v) between their parent's corners, every node on the
+ * surface; without flags, the same mesh. */
+static void test_split(void) {
+  const double a = 3, b = 1;
+  hoc_model *model;
+  CHECK_OK(hoc_cad_create_analytic(HOC_ANALYTIC_TORUS, a, b, &model));
+  if (!model) return;
+  const hoc_cad_face *f = &model->faces[0];
+  hoc_mesh *lin = NULL, *m = NULL, *s = NULL;
+  CHECK_OK(hoc_mesh_grid_linear(model, 24, 8, &lin));
+  CHECK_OK(hoc_mesh_elevate(lin, 3, HOC_NODES_EQUISPACED, &m));
+  if (!m) goto out;
+  size_t ne = m->n_elems, np = (size_t)m->np;
+  unsigned char *flag = calloc(ne, 1);
+  CHECK_STATUS(hoc_mesh_split(m, NULL, &s), HOC_ERR_ARGUMENT);
+  CHECK_STATUS(hoc_mesh_split(m, flag, NULL), HOC_ERR_ARGUMENT);
+  /* nothing flagged: the same mesh */
+  CHECK_OK(hoc_mesh_split(m, flag, &s));
+  if (s) {
+    int same = s->n_elems == ne && s->n_nodes == m->n_nodes;
+    for (size_t i = 0; same && i < ne * np; ++i)
+      same = !memcmp(s->xyz + 3 * s->conn[i], m->xyz + 3 * m->conn[i], 3 * sizeof(double));
+    CHECK(same);
+  }
+  hoc_mesh_destroy(&s);
+  size_t flagged[2] = {0, ne / 2 + 5};
+  flag[flagged[0]] = flag[flagged[1]] = 1;
+  CHECK_OK(hoc_mesh_split(m, flag, &s));
+  if (!s) goto done;
+  CHECK(s->n_elems == ne + 2 * (3 + 3));
+  /* (the grid has no curve lines: test_mesh_gmsh splits edges on curves) */
+  /* conforming: each corner edge in exactly two elements, the same nodes */
+  size_t bad = 0;
+  for (size_t e = 0; e < s->n_elems; ++e)
+    for (int k = 0; k < 3; ++k) {
+      const size_t *c = s->conn + e * np;
+      size_t x = c[k], y = c[(k + 1) % 3], found = 0;
+      for (size_t e2 = 0; e2 < s->n_elems; ++e2) {
+        if (e2 == e) continue;
+        const size_t *c2 = s->conn + e2 * np;
+        for (int k2 = 0; k2 < 3; ++k2) {
+          if (c2[k2] != y || c2[(k2 + 1) % 3] != x) continue; /* the other side runs y -> x */
+          ++found;
+          for (int j = 0; j < 2; ++j)
+            bad += c[3 + k * 2 + j] != c2[3 + k2 * 2 + (1 - j)];
+        }
+      }
+      bad += found != 1;
+    }
+  CHECK(bad == 0);
+  /* parents in order: unsplit ones unchanged, children straight in (u, v) */
+  double rs[2 * 10];
+  CHECK_OK(hoc_tri_nodes(3, HOC_NODES_EQUISPACED, rs));
+  size_t j = 0, kept = 0;
+  double gap = 0;
+  for (size_t e = 0; e < ne; ++e) {
+    const size_t *c = m->conn + e * np, *c2 = s->conn + j * np;
+    int same = 1;
+    for (size_t k = 0; k < np; ++k)
+      same &= !memcmp(m->xyz + 3 * c[k], s->xyz + 3 * c2[k], 3 * sizeof(double));
+    if (same) {
+      ++kept;
+      ++j;
+      continue;
+    }
+    size_t n_kids = flag[e] ? 4 : 2;
+    const double *P = m->elem_uv + 2 * e * np; /* corners 0..2 */
+    for (size_t kid = 0; kid < n_kids; ++kid, ++j) {
+      const double *C = s->elem_uv + 2 * j * np;
+      /* the child's corners in the parent's (u, v); its nodes affine in them */
+      for (size_t k = 0; k < np; ++k) {
+        double r = rs[2 * k], t = rs[2 * k + 1], want[2];
+        for (int d = 0; d < 2; ++d)
+          want[d] = C[d] + r * (C[2 + d] - C[d]) + t * (C[4 + d] - C[d]);
+        gap = fmax(gap, uv_gap(f, C + 2 * k, want));
+      }
+    }
+    if (flag[e]) { /* the first child: corner 0, then the midpoint of edge 0 */
+      const double *C = s->elem_uv + 2 * (j - 4) * np;
+      double mid[2] = {0.5 * (P[0] + P[2]), 0.5 * (P[1] + P[3])};
+      gap = fmax(gap, uv_gap(f, C, P));
+      gap = fmax(gap, uv_gap(f, C + 2, mid));
+    }
+  }
+  CHECK(j == s->n_elems);
+  CHECK(kept == ne - 2 - 2 * 3);
+  CHECK(gap <= 1e-12);
+  double worst = 0, dist;
+  for (size_t i = 0; i < s->n_nodes; ++i)
+    worst = fmax(worst, off_surface(HOC_ANALYTIC_TORUS, a, b, s->xyz + 3 * i));
+  CHECK(worst <= 1e-13 * a);
+  CHECK_OK(hoc_mesh_max_cad_distance(s, &dist));
+  CHECK(dist == 0.0);
+  hoc_quality_stats st;
+  CHECK_OK(hoc_mesh_measure(s, HOC_MEASURE_SHAPE, NULL, NULL, &st));
+  CHECK(st.tangled == 0);
+  printf(
+      "split on the torus: %zu -> %zu elements, %zu kept, %zu unmatched edge nodes, uv gap %.2g, "
+      "min q %.3f\n",
+      ne, s->n_elems, kept, bad, gap, st.min);
+done:
+  free(flag);
+  hoc_mesh_destroy(&s);
+out:
+  hoc_mesh_destroy(&m);
+  hoc_mesh_destroy(&lin);
+  hoc_model_destroy(&model);
+}
+
 int main(void) {
+  test_split();
   test_topology_detection();
   test_derivatives();
   test_invert();

@@ -458,7 +458,64 @@ static void test_two_faces_one_edge(void) {
   hoc_model_destroy(&model);
 }
 
+/* Local refinement on a real model: every seventh element split (the
+ * neighbours too), lines on the curves halved where their edge is: every
+ * line is an edge of an element, with the same nodes, all on its curve;
+ * every node on the CAD; no element tangled. */
+static void test_split_on_curves(void) {
+  hoc_model *model = open_bundled("screw.step");
+  if (!model) return;
+  hoc_mesh *lin = NULL, *m = NULL, *s = NULL;
+  CHECK_OK(hoc_mesh_generate_linear(model, NULL, &lin));
+  if (lin) CHECK_OK(hoc_mesh_elevate(lin, 3, HOC_NODES_EQUISPACED, &m));
+  if (!m) goto out;
+  unsigned char *flag = calloc(m->n_elems, 1);
+  for (size_t e = 0; e < m->n_elems; e += 7)
+    flag[e] = 1;
+  CHECK_OK(hoc_mesh_split(m, flag, &s));
+  free(flag);
+  if (!s) goto out;
+  size_t np = (size_t)s->np, p = (size_t)s->order, unmatched = 0, off_curve = 0;
+  for (size_t l = 0; l < s->n_lines; ++l) {
+    const size_t *ln = s->line_conn + l * (p + 1);
+    int found = 0;
+    for (size_t e = 0; e < s->n_elems && !found; ++e)
+      for (size_t k = 0; k < 3 && !found; ++k) {
+        const size_t *c = s->conn + e * np;
+        size_t a = c[k], b = c[(k + 1) % 3];
+        if (a == ln[0] && b == ln[1]) {
+          found = 1;
+          for (size_t j = 0; j + 1 < p; ++j)
+            found &= c[3 + k * (p - 1) + j] == ln[2 + j];
+        } else if (a == ln[1] && b == ln[0]) {
+          found = 1;
+          for (size_t j = 0; j + 1 < p; ++j)
+            found &= c[3 + k * (p - 1) + j] == ln[p - j];
+        }
+      }
+    unmatched += !found;
+    for (size_t j = 2; j <= p; ++j)
+      off_curve += s->dim[ln[j]] != HOC_ON_CURVE || s->entity[ln[j]] != s->line_curve[l];
+  }
+  printf("screw split: %zu -> %zu elements, %zu -> %zu lines, %zu unmatched, %zu off their curve\n",
+         m->n_elems, s->n_elems, m->n_lines, s->n_lines, unmatched, off_curve);
+  CHECK(s->n_elems > m->n_elems && s->n_lines > m->n_lines);
+  CHECK(unmatched == 0 && off_curve == 0);
+  double dist;
+  CHECK_OK(hoc_mesh_max_cad_distance(s, &dist));
+  CHECK(dist == 0.0);
+  hoc_quality_stats st;
+  CHECK_OK(hoc_mesh_measure(s, HOC_MEASURE_SHAPE, NULL, NULL, &st));
+  CHECK(st.tangled == 0);
+out:
+  hoc_mesh_destroy(&s);
+  hoc_mesh_destroy(&m);
+  hoc_mesh_destroy(&lin);
+  hoc_model_destroy(&model);
+}
+
 int main(void) {
+  test_split_on_curves();
   test_two_faces_one_edge();
   test_refine_faces();
   test_best_state_kept();

@@ -277,10 +277,12 @@ static const char *usage_optimize =
     "options:\n"
     "  -o, --output F.msh   optimized mesh (MSH 4.1), or F.vtu\n"
     "  --keep-nodes         always start from the input's own high-order nodes\n"
+    "  --refinements N      if elements stay tangled, split them in four (their\n"
+    "                       neighbours in two or four) and optimise again, at most\n"
+    "                       N times (default 2; 0 keeps the input's elements)\n"
     "  --vtu F.vtu          also a VTU with q per element\n"
     "  --json F.json        the report as JSON\n"
-    "  --measure M          shape | oddy (default shape)\n"
-    OPTIMIZE_OPTIONS
+    "  --measure M          shape | oddy (default shape)\n" OPTIMIZE_OPTIONS
     "  --threads N          threads (default: all cores)\n"
     "  -q, --quiet          print only errors\n";
 
@@ -365,7 +367,7 @@ static int parse(int argc, char **argv, options *o, const char **pos, int max_po
       if (!parse_int("--max-iterations", v, 1, 100000, &o->max_iterations)) return 0;
     } else if (opt && (VALUE("--output") || VALUE("-o"))) {
       o->out = v;
-    } else if (mesh && VALUE("--refinements")) {
+    } else if (opt && VALUE("--refinements")) {
       if (!parse_int("--refinements", v, 0, 10, &o->refinements)) return 0;
     } else if (mesh && (VALUE("--order") || VALUE("-p"))) {
       if (!parse_int("--order", v, 1, HOC_MAX_ORDER, &o->order)) return 0;
@@ -436,7 +438,8 @@ typedef struct report {
   double write_seconds; /* writing the mesh files */
   double model_seconds; /* reading the CAD model */
   size_t nodes;         /* of the final mesh */
-  int refinements;      /* times faces with tangled elements were meshed again finer */
+  int refinements;      /* times tangled elements were meshed again finer (mesh: their
+                           faces; optimize: split) */
 } report;
 
 static void print_table(const report *r) {
@@ -772,6 +775,27 @@ static int write_pictures(const options *o, int n, const hoc_mesh *const *meshes
 /* After an optimised stage that left elements tangled: bound the edge
  * length on their faces by half their longest edge (*face_size, allocated
  * on first use), say so, and start the report again. */
+/* The CAD tags of the faces holding flagged elements, each once, in element
+ * order (at most 20), then a newline; on stderr. */
+static void print_faces(const hoc_mesh *mesh, const unsigned char *flag) {
+  size_t ne = hoc_mesh_num_elements(mesh);
+  int shown[20], n_shown = 0, more = 0;
+  for (size_t e = 0; e < ne; ++e) {
+    if (!flag[e]) continue;
+    int tag = hoc_mesh_element_face_tag(mesh, e), seen = 0;
+    for (int k = 0; k < n_shown && !seen; ++k)
+      seen = shown[k] == tag;
+    if (seen) continue;
+    if (n_shown == 20) {
+      more = 1;
+      break;
+    }
+    shown[n_shown++] = tag;
+    fprintf(stderr, " %d", tag);
+  }
+  fprintf(stderr, "%s\n", more ? " ..." : "");
+}
+
 static int refine_faces(const options *o, report *r, const hoc_model *model, const hoc_mesh *lin,
                         const hoc_mesh *ho, double **face_size) {
   size_t ne = hoc_mesh_num_elements(ho);
@@ -797,22 +821,7 @@ static int refine_faces(const options *o, report *r, const hoc_model *model, con
             "%s: %zu element(s) still tangled; meshing their faces again with edges half "
             "as long (refinement %d of at most %d): faces",
             program, total, r->refinements, o->refinements);
-    /* each face once, in element order */
-    int shown[20], n_shown = 0, more = 0;
-    for (size_t e = 0; e < ne; ++e) {
-      if (!tangled[e]) continue;
-      int tag = hoc_mesh_element_face_tag(ho, e), seen = 0;
-      for (int k = 0; k < n_shown && !seen; ++k)
-        seen = shown[k] == tag;
-      if (seen) continue;
-      if (n_shown == 20) {
-        more = 1;
-        break;
-      }
-      shown[n_shown++] = tag;
-      fprintf(stderr, " %d", tag);
-    }
-    fprintf(stderr, "%s\n", more ? " ..." : "");
+    print_faces(ho, tangled);
   }
   free(tangled);
   r->n = 0;
@@ -1110,8 +1119,59 @@ static int optimize_starts(const options *o, report *r, hoc_mesh **mesh) {
   return EXIT_OK;
 }
 
+/* Where `optimize` leaves tangled elements: split them in four (their
+ * neighbours in two or four, to keep the mesh conforming; children keep
+ * their parent's curved map) and optimise again. The next split starts
+ * from this result; *best and *best_r hold the result with the fewest
+ * tangled elements so far (the earlier on a tie). The report keeps its
+ * input stage, then "split" and "optimized". */
+static int split_tangled(const options *o, report *r, hoc_mesh **mesh, hoc_mesh **best,
+                         report *best_r) {
+  size_t ne = hoc_mesh_num_elements(*mesh), total = 0;
+  unsigned char *tangled = calloc(ne ? ne : 1, 1);
+  if (!tangled) {
+    error_line("out of memory");
+    return EXIT_FAILURE_;
+  }
+  double t0 = now();
+  hoc_mesh *fine = NULL;
+  hoc_status st = hoc_mesh_measure(*mesh, o->measure, NULL, tangled, NULL);
+  if (st == HOC_OK) st = hoc_mesh_split(*mesh, tangled, &fine);
+  if (st != HOC_OK) {
+    free(tangled);
+    return fail(st, 0);
+  }
+  for (size_t e = 0; e < ne; ++e)
+    total += tangled[e];
+  r->refinements++;
+  if (!o->quiet) {
+    fprintf(stderr,
+            "%s: %zu element(s) still tangled; splitting them and their neighbours (%zu -> %zu "
+            "elements) and optimising again (refinement %d of at most %d): faces",
+            program, total, ne, hoc_mesh_num_elements(fine), r->refinements, o->refinements);
+    print_faces(*mesh, tangled);
+  }
+  free(tangled);
+  r->n = 1; /* the input stage stays */
+  int code = measure_stage(o, r, "split", fine, now() - t0, NULL);
+  if (!code) code = optimize_stage(o, r, fine);
+  if (code) {
+    hoc_mesh_destroy(&fine);
+    return code;
+  }
+  if (*mesh != *best) hoc_mesh_destroy(mesh);
+  *mesh = fine;
+  if (r->stages[r->n - 1].stats.tangled < best_r->stages[best_r->n - 1].stats.tangled) {
+    hoc_mesh_destroy(best);
+    *best = fine;
+    *best_r = *r;
+  }
+  return EXIT_OK;
+}
+
 static int cmd_optimize(int argc, char **argv) {
   options o = {0};
+  o.refinements = 2;
   const char *pos[2];
   int n_pos, pr = parse(argc, argv, &o, pos, 2, &n_pos, CMD_OPTIMIZE);
   if (pr < 0) {
@@ -1145,6 +1205,30 @@ static int cmd_optimize(int argc, char **argv) {
   }
   if ((code = measure_stage(&o, &r, "input", mesh, now() - t0, NULL))) goto done;
   if ((code = optimize_starts(&o, &r, &mesh))) goto done;
+  if (r.stages[r.n - 1].stats.tangled && o.refinements > 0) {
+    hoc_mesh *best = mesh;
+    report best_r = r;
+    while (!code && r.stages[r.n - 1].stats.tangled && r.refinements < o.refinements)
+      code = split_tangled(&o, &r, &mesh, &best, &best_r);
+    if (mesh != best) {
+      hoc_mesh_destroy(&mesh);
+      mesh = best;
+      int made = r.refinements;
+      r = best_r;
+      r.refinements = made;
+      if (!code && !o.quiet && best_r.refinements)
+        fprintf(stderr,
+                "%s: note: kept the mesh of refinement %d of %d, which has the fewest "
+                "tangled elements\n",
+                program, best_r.refinements, made);
+      else if (!code && !o.quiet)
+        fprintf(stderr,
+                "%s: note: splitting left more tangled elements: kept the mesh before "
+                "it\n",
+                program);
+    }
+    if (code) goto done;
+  }
   if (!o.quiet) {
     printf("mesh %s on %s: %zu nodes\n", o.mesh_in, o.model, hoc_mesh_num_nodes(mesh));
     print_table(&r);
