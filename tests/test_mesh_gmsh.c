@@ -373,6 +373,16 @@ static void test_refine_faces(void) {
   hoc_model_destroy(&model);
 }
 
+/* Every node on the CAD (its parameters say where) and no element tangled. */
+static void check_on_cad_untangled(const hoc_model *model, const hoc_mesh *m) {
+  double dist;
+  CHECK_OK(hoc_mesh_max_cad_distance(m, &dist));
+  CHECK(dist <= 1e-10 * model->diagonal);
+  hoc_quality_stats st;
+  CHECK_OK(hoc_mesh_measure(m, HOC_MEASURE_SHAPE, NULL, NULL, &st));
+  CHECK(st.tangled == 0);
+}
+
 /* Face nodes used by an element of another face (each face must have its own). */
 static size_t foreign_nodes(const hoc_mesh *m) {
   size_t n = 0;
@@ -446,12 +456,7 @@ static void test_two_faces_one_edge(void) {
   }
   if (m) {
     CHECK(foreign_nodes(m) == 0);
-    double dist;
-    CHECK_OK(hoc_mesh_max_cad_distance(m, &dist));
-    CHECK(dist <= 1e-10 * model->diagonal);
-    hoc_quality_stats st;
-    CHECK_OK(hoc_mesh_measure(m, HOC_MEASURE_SHAPE, NULL, NULL, &st));
-    CHECK(st.tangled == 0);
+    check_on_cad_untangled(model, m);
   }
   hoc_mesh_destroy(&m);
   hoc_mesh_destroy(&lin);
@@ -501,12 +506,7 @@ static void test_split_on_curves(void) {
          m->n_elems, s->n_elems, m->n_lines, s->n_lines, unmatched, off_curve);
   CHECK(s->n_elems > m->n_elems && s->n_lines > m->n_lines);
   CHECK(unmatched == 0 && off_curve == 0);
-  double dist;
-  CHECK_OK(hoc_mesh_max_cad_distance(s, &dist));
-  CHECK(dist == 0.0);
-  hoc_quality_stats st;
-  CHECK_OK(hoc_mesh_measure(s, HOC_MEASURE_SHAPE, NULL, NULL, &st));
-  CHECK(st.tangled == 0);
+  check_on_cad_untangled(model, s);
 out:
   hoc_mesh_destroy(&s);
   hoc_mesh_destroy(&m);

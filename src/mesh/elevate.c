@@ -16,44 +16,6 @@ static double wrap_t(const hoc_cad_curve *c, double t) {
   return t - c->period * floor((t - c->lo) / c->period);
 }
 
-typedef struct builder {
-  size_t n, cap;
-  double *par;
-  signed char *dim;
-  int *ent;
-} builder;
-
-/* Room for n nodes up front (an upper bound). */
-static hoc_status builder_reserve(builder *b, size_t n) {
-  b->par = hoc_realloc(NULL, 2 * n, sizeof *b->par);
-  b->dim = hoc_realloc(NULL, n, sizeof *b->dim);
-  b->ent = hoc_realloc(NULL, n, sizeof *b->ent);
-  HOC_CHECK(b->par && b->dim && b->ent, HOC_ERR_MEMORY, "out of memory for %zu nodes", n);
-  b->cap = n;
-  return HOC_OK;
-}
-
-static hoc_status builder_add(builder *b, int dim, int entity, double p0, double p1,
-                              size_t *index) {
-  if (b->n == b->cap) {
-    size_t cap = b->cap ? 2 * b->cap : 1024;
-    double *par = hoc_realloc(b->par, 2 * cap, sizeof *par);
-    if (par) b->par = par;
-    signed char *d = hoc_realloc(b->dim, cap, sizeof *d);
-    if (d) b->dim = d;
-    int *e = hoc_realloc(b->ent, cap, sizeof *e);
-    if (e) b->ent = e;
-    HOC_CHECK(par && d && e, HOC_ERR_MEMORY, "out of memory for %zu nodes", cap);
-    b->cap = cap;
-  }
-  b->par[2 * b->n] = p0;
-  b->par[2 * b->n + 1] = p1;
-  b->dim[b->n] = (signed char)dim;
-  b->ent[b->n] = entity;
-  *index = b->n++;
-  return HOC_OK;
-}
-
 /* The edges of a triangulation through the lower-numbered vertex of each:
  * a bucket per vertex, scanned linearly (a vertex has a handful of edges).
  * Buckets follow the node numbering, which meshers keep local, so this reads
@@ -175,7 +137,7 @@ static hoc_status reinterpolate(const hoc_mesh *in, int p, hoc_nodeset set, hoc_
   edge_table edges = {0};
   int *lcurve = NULL;
   hoc_lagrange *basis = NULL;
-  builder b = {0};
+  hoc_node_builder b = {0};
   size_t *edge_line = NULL;
   hoc_status status = HOC_OK;
   HOC_ALLOC_GOTO(rs, 2 * (size_t)np, done);
@@ -213,16 +175,16 @@ static hoc_status reinterpolate(const hoc_mesh *in, int p, hoc_nodeset set, hoc_
   }
   HOC_TRY_GOTO(split_face_edges(in, &edges, edge_line, elem_edge, edge_new), done);
   /* corners (at most the source's nodes), edge nodes, interior nodes */
-  HOC_TRY_GOTO(builder_reserve(&b, in->n_nodes + edges.n_edges * (size_t)(p - 1) +
-                                       ne * (size_t)(np - 3 * p)),
+  HOC_TRY_GOTO(hoc_node_builder_reserve(&b, in->n_nodes + edges.n_edges * (size_t)(p - 1) +
+                                                ne * (size_t)(np - 3 * p)),
                done);
   /* vertices keep their classification and parameters */
   for (size_t e = 0; e < ne; ++e)
     for (int k = 0; k < 3; ++k) {
       size_t i = in->conn[e * (size_t)npi + k];
       if (vmap[i] == SIZE_MAX)
-        HOC_TRY_GOTO(builder_add(&b, in->dim[i], in->entity[i], in->param[2 * i],
-                                 in->param[2 * i + 1], &vmap[i]),
+        HOC_TRY_GOTO(hoc_node_builder_add(&b, in->dim[i], in->entity[i], in->param[2 * i],
+                                          in->param[2 * i + 1], &vmap[i]),
                      done);
       conn[e * (size_t)np + k] = vmap[i];
     }
@@ -274,7 +236,7 @@ static hoc_status reinterpolate(const hoc_mesh *in, int p, hoc_nodeset set, hoc_
           hoc_lagrange_1d(pin, s_in, s[j + 1], L, NULL);
           double t = 0;
           for (int m = 0; m <= pin; ++m) t += L[m] * edge_t[m];
-          HOC_TRY_GOTO(builder_add(&b, HOC_ON_CURVE, c, wrap_t(cv, t), 0, &dst[j]), done);
+          HOC_TRY_GOTO(hoc_node_builder_add(&b, HOC_ON_CURVE, c, wrap_t(cv, t), 0, &dst[j]), done);
         }
       } else {
         /* inside the face: interpolate (u,v) along the edge; at a pole the
@@ -294,7 +256,7 @@ static hoc_status reinterpolate(const hoc_mesh *in, int p, hoc_nodeset set, hoc_
             uv[1] += L[m] * edge_uv[2 * m + 1];
           }
           hoc_cad_face_wrap(face, uv);
-          HOC_TRY_GOTO(builder_add(&b, HOC_ON_FACE, f, uv[0], uv[1], &dst[j]), done);
+          HOC_TRY_GOTO(hoc_node_builder_add(&b, HOC_ON_FACE, f, uv[0], uv[1], &dst[j]), done);
         }
       }
     }
@@ -319,7 +281,7 @@ static hoc_status reinterpolate(const hoc_mesh *in, int p, hoc_nodeset set, hoc_
           }
       }
       hoc_cad_face_wrap(face, uv);
-      HOC_TRY_GOTO(builder_add(&b, HOC_ON_FACE, f, uv[0], uv[1], &out_cn[k]), done);
+      HOC_TRY_GOTO(hoc_node_builder_add(&b, HOC_ON_FACE, f, uv[0], uv[1], &out_cn[k]), done);
     }
   }
   /* lines of order p along the curve edges that elements use */
@@ -380,9 +342,7 @@ done:
   free(lcurve);
   free(edge_first);
   free(edge_a);
-  free(b.par);
-  free(b.dim);
-  free(b.ent);
+  hoc_node_builder_free(&b);
   edge_table_free(&edges);
   free(elem_edge);
   free(edge_new);

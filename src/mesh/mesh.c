@@ -399,3 +399,35 @@ done:
   free(chunk);
   return status;
 }
+
+/* Node builder ----------------------------------------------------------- */
+
+hoc_status hoc_node_builder_reserve(hoc_node_builder *b, size_t n) {
+  double *par = hoc_realloc(b->par, 2 * n, sizeof *par);
+  if (par) b->par = par;
+  signed char *d = hoc_realloc(b->dim, n, sizeof *d);
+  if (d) b->dim = d;
+  int *e = hoc_realloc(b->ent, n, sizeof *e);
+  if (e) b->ent = e;
+  HOC_CHECK(par && d && e, HOC_ERR_MEMORY, "out of memory for %zu nodes", n);
+  if (n > b->cap) b->cap = n;
+  return HOC_OK;
+}
+
+hoc_status hoc_node_builder_add(hoc_node_builder *b, int dim, int entity, double p0, double p1,
+                                size_t *index) {
+  if (b->n == b->cap) HOC_TRY(hoc_node_builder_reserve(b, b->cap ? 2 * b->cap : 1024));
+  b->par[2 * b->n] = p0;
+  b->par[2 * b->n + 1] = p1;
+  b->dim[b->n] = (signed char)dim;
+  b->ent[b->n] = entity;
+  *index = b->n++;
+  return HOC_OK;
+}
+
+void hoc_node_builder_free(hoc_node_builder *b) {
+  free(b->par);
+  free(b->dim);
+  free(b->ent);
+  *b = (hoc_node_builder){0};
+}

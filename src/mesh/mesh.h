@@ -95,6 +95,22 @@ hoc_status hoc_mesh_alloc(hoc_model *model, int order, size_t n_nodes, size_t n_
  *  at the new set's reference nodes, mapped onto the CAD. */
 hoc_status hoc_mesh_convert_nodeset(const hoc_mesh *mesh, hoc_nodeset set, hoc_mesh **out);
 
+/** Classified nodes with parameters, grown one at a time (the input of a
+ *  hoc_mesh_source being built). */
+typedef struct hoc_node_builder {
+  size_t n, cap;
+  double *par;      /* [cap][2] */
+  signed char *dim; /* [cap] */
+  int *ent;         /* [cap] */
+} hoc_node_builder;
+
+/** Room for n nodes (an upper bound; adding more still works). */
+hoc_status hoc_node_builder_reserve(hoc_node_builder *b, size_t n);
+/** Append a node; *index receives its number. */
+hoc_status hoc_node_builder_add(hoc_node_builder *b, int dim, int entity, double p0, double p1,
+                                size_t *index);
+void hoc_node_builder_free(hoc_node_builder *b);
+
 /** Evaluate node positions from parameters (all nodes). */
 hoc_status hoc_mesh_update_xyz(hoc_mesh *mesh);
 

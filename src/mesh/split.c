@@ -55,33 +55,6 @@ static size_t find_line(const size_t *sorted, size_t n, size_t a, size_t b) {
   return SIZE_MAX;
 }
 
-typedef struct nodes {
-  size_t n, cap;
-  double *par;
-  signed char *dim;
-  int *ent;
-} nodes;
-
-static hoc_status nodes_add(nodes *b, int dim, int entity, double p0, double p1, size_t *index) {
-  if (b->n == b->cap) {
-    size_t cap = b->cap ? 2 * b->cap : 1024;
-    double *par = hoc_realloc(b->par, 2 * cap, sizeof *par);
-    if (par) b->par = par;
-    signed char *d = hoc_realloc(b->dim, cap, sizeof *d);
-    if (d) b->dim = d;
-    int *e = hoc_realloc(b->ent, cap, sizeof *e);
-    if (e) b->ent = e;
-    HOC_CHECK(par && d && e, HOC_ERR_MEMORY, "out of memory for %zu nodes", cap);
-    b->cap = cap;
-  }
-  b->par[2 * b->n] = p0;
-  b->par[2 * b->n + 1] = p1;
-  b->dim[b->n] = (signed char)dim;
-  b->ent[b->n] = entity;
-  *index = b->n++;
-  return HOC_OK;
-}
-
 /* What the split needs of the mesh while building children. */
 typedef struct splitter {
   const hoc_mesh *m;
@@ -90,7 +63,7 @@ typedef struct splitter {
   const double *s1;        /* [p + 1] its edge nodes */
   const size_t *edge_of;   /* [3 ne] edge number of each element edge */
   const size_t *edge_line; /* [edges] line on a CAD curve, or SIZE_MAX */
-  nodes out;
+  hoc_node_builder out;
   hoc_hash new_edges; /* pair of end nodes -> index into new_first and new_start */
   size_t *new_first, *new_start, n_new, cap_new; /* first node, and the end it starts from */
 } splitter;
@@ -183,12 +156,12 @@ static hoc_status child_edge(splitter *S, size_t e, size_t a, size_t b, const do
     size_t idx;
     if (curve) {
       size_t l = S->edge_line[S->edge_of[3 * e + (size_t)k]];
-      HOC_TRY(nodes_add(&S->out, HOC_ON_CURVE, m->line_curve[l],
-                        curve_point(S, e, k, along_edge(k, x)), 0, &idx));
+      HOC_TRY(hoc_node_builder_add(&S->out, HOC_ON_CURVE, m->line_curve[l],
+                                   curve_point(S, e, k, along_edge(k, x)), 0, &idx));
     } else {
       double uv[2];
       face_point(S, e, x, uv);
-      HOC_TRY(nodes_add(&S->out, HOC_ON_FACE, m->elem_face[e], uv[0], uv[1], &idx));
+      HOC_TRY(hoc_node_builder_add(&S->out, HOC_ON_FACE, m->elem_face[e], uv[0], uv[1], &idx));
     }
     dst[j] = idx;
   }
@@ -209,7 +182,7 @@ static hoc_status child(splitter *S, size_t e, const size_t c[3], const double x
     for (int d = 0; d < 2; ++d)
       y[d] = x[0][d] + r * (x[1][d] - x[0][d]) + s * (x[2][d] - x[0][d]);
     face_point(S, e, y, uv);
-    HOC_TRY(nodes_add(&S->out, HOC_ON_FACE, S->m->elem_face[e], uv[0], uv[1], &conn[i]));
+    HOC_TRY(hoc_node_builder_add(&S->out, HOC_ON_FACE, S->m->elem_face[e], uv[0], uv[1], &conn[i]));
   }
   return HOC_OK;
 }
@@ -292,14 +265,7 @@ hoc_status hoc_mesh_split(const hoc_mesh *mesh, const unsigned char *elements, h
   }
   /* the mesh's nodes, then midpoints (straight in t on a curve, else in
    * the (u, v) of the first element using the edge) */
-  S.out.cap = m->n_nodes + 1024;
-  S.out.par = hoc_realloc(NULL, 2 * S.out.cap, sizeof *S.out.par);
-  S.out.dim = hoc_realloc(NULL, S.out.cap, 1);
-  S.out.ent = hoc_realloc(NULL, S.out.cap, sizeof *S.out.ent);
-  if (!S.out.par || !S.out.dim || !S.out.ent) {
-    status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory for %zu nodes", S.out.cap);
-    goto done;
-  }
+  HOC_TRY_GOTO(hoc_node_builder_reserve(&S.out, m->n_nodes + 1024), done);
   memcpy(S.out.par, m->param, 2 * m->n_nodes * sizeof *S.out.par);
   memcpy(S.out.dim, m->dim, m->n_nodes);
   memcpy(S.out.ent, m->entity, m->n_nodes * sizeof *S.out.ent);
@@ -318,13 +284,14 @@ hoc_status hoc_mesh_split(const hoc_mesh *mesh, const unsigned char *elements, h
                    0.5 * (corner_x[k][1] + corner_x[(k + 1) % 3][1])};
     if (edge_line[id] != SIZE_MAX) {
       size_t l = edge_line[id];
-      HOC_TRY_GOTO(nodes_add(&S.out, HOC_ON_CURVE, m->line_curve[l], curve_point(&S, e, k, 0.5), 0,
-                             &mid[id]),
+      HOC_TRY_GOTO(hoc_node_builder_add(&S.out, HOC_ON_CURVE, m->line_curve[l],
+                                        curve_point(&S, e, k, 0.5), 0, &mid[id]),
                    done);
     } else {
       double uv[2];
       face_point(&S, e, c, uv);
-      HOC_TRY_GOTO(nodes_add(&S.out, HOC_ON_FACE, m->elem_face[e], uv[0], uv[1], &mid[id]), done);
+      HOC_TRY_GOTO(
+          hoc_node_builder_add(&S.out, HOC_ON_FACE, m->elem_face[e], uv[0], uv[1], &mid[id]), done);
     }
   }
   /* children: four (red) or two (green: through the split edge's midpoint
@@ -488,9 +455,7 @@ hoc_status hoc_mesh_split(const hoc_mesh *mesh, const unsigned char *elements, h
   status = hoc_mesh_assemble(m->model, &src, INFINITY, out);
 done:
   hoc_hash_free(&S.new_edges);
-  free(S.out.par);
-  free(S.out.dim);
-  free(S.out.ent);
+  hoc_node_builder_free(&S.out);
   free(S.new_first);
   free(S.new_start);
   free(rs);
