@@ -1225,8 +1225,7 @@ static int cmd_optimize(int argc, char **argv) {
                 program, best_r.refinements, made);
       else if (!code && !o.quiet)
         fprintf(stderr,
-                "%s: note: splitting left more tangled elements: kept the mesh before "
-                "it\n",
+                "%s: note: splitting left no fewer tangled elements: kept the mesh before it\n",
                 program);
     }
     if (code) goto done;
