@@ -89,9 +89,9 @@ static hoc_status edge_table_build(edge_table *t, const size_t *conn, size_t ne,
  * bounded by the same two curves, each meshed there without a vertex
  * inside) gets its own number on each further face, so that each face
  * makes its own nodes on it: a node lies on one face. */
-static hoc_status split_face_edges(const hoc_mesh *in, edge_table *t, const size_t *edge_line,
+static hoc_status split_face_edges(const hoc_mesh *in, size_t *n_edges, const size_t *edge_line,
                                    size_t *elem_edge, unsigned char *edge_new) {
-  size_t n0 = t->n_edges;
+  size_t n0 = *n_edges;
   int *owner = hoc_realloc(NULL, n0 + 1, sizeof *owner);
   if (!owner) return HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
   hoc_hash h = {0};
@@ -108,15 +108,34 @@ static hoc_status split_face_edges(const hoc_mesh *in, edge_table *t, const size
     if (!h.slots) HOC_TRY_GOTO(hoc_hash_init(&h, 16), done);
     int found;
     HOC_TRY_GOTO(
-        hoc_hash_insert(&h, (uint64_t)id * nf + (uint64_t)f, t->n_edges, &found, &elem_edge[x]),
+        hoc_hash_insert(&h, (uint64_t)id * nf + (uint64_t)f, *n_edges, &found, &elem_edge[x]),
         done);
     edge_new[x] = !found;
-    t->n_edges += !found;
+    *n_edges += !found;
   }
 done:
   hoc_hash_free(&h);
   free(owner);
   return status;
+}
+
+hoc_status hoc_mesh_edges(const hoc_mesh *in, size_t *elem_edge, unsigned char *first,
+                          size_t *edge_line, size_t *line_edge, size_t *n_edges) {
+  size_t ne = in->n_elems;
+  int pin = in->order;
+  edge_table edges = {0};
+  HOC_TRY(edge_table_build(&edges, in->conn, ne, in->np, in->n_nodes, elem_edge, first));
+  for (size_t id = 0; id < 3 * ne + 1; ++id)
+    edge_line[id] = SIZE_MAX;
+  for (size_t l = 0; l < in->n_lines; ++l) {
+    const size_t *ln = in->line_conn + l * (size_t)(pin + 1);
+    size_t x = edge_entry(&edges, ln[0], ln[1]);
+    line_edge[l] = x == SIZE_MAX ? SIZE_MAX : edges.id[x];
+    if (x != SIZE_MAX && edge_line[edges.id[x]] == SIZE_MAX) edge_line[edges.id[x]] = l;
+  }
+  *n_edges = edges.n_edges;
+  edge_table_free(&edges);
+  return split_face_edges(in, n_edges, edge_line, elem_edge, first);
 }
 
 /* Re-interpolation: the new mesh of order p on node set `set` evaluates
@@ -134,11 +153,10 @@ static hoc_status reinterpolate(const hoc_mesh *in, int p, hoc_nodeset set, hoc_
   size_t *vmap = NULL, *conn = NULL, *lconn = NULL, *edge_first = NULL, *edge_a = NULL;
   size_t *elem_edge = NULL;
   unsigned char *edge_new = NULL;
-  edge_table edges = {0};
   int *lcurve = NULL;
   hoc_lagrange *basis = NULL;
   hoc_node_builder b = {0};
-  size_t *edge_line = NULL;
+  size_t *edge_line = NULL, *line_edge = NULL, n_edges = 0;
   hoc_status status = HOC_OK;
   HOC_ALLOC_GOTO(rs, 2 * (size_t)np, done);
   HOC_ALLOC_GOTO(s, (size_t)p + 1, done);
@@ -162,20 +180,12 @@ static hoc_status reinterpolate(const hoc_mesh *in, int p, hoc_nodeset set, hoc_
     vmap[i] = SIZE_MAX;
   HOC_ALLOC_GOTO(elem_edge, 3 * ne, done);
   HOC_ALLOC_GOTO(edge_new, 3 * ne, done);
-  HOC_TRY_GOTO(edge_table_build(&edges, in->conn, ne, npi, in->n_nodes, elem_edge, edge_new), done);
-  /* the source line (CAD curve edge) on each edge, the first if several
-   * (room for the split edges below: at most one per element edge) */
+  /* the source line (CAD curve edge) on each edge, the first if several */
   HOC_ALLOC_GOTO(edge_line, 3 * ne + 1, done);
-  for (size_t id = 0; id < 3 * ne + 1; ++id)
-    edge_line[id] = SIZE_MAX;
-  for (size_t l = 0; l < in->n_lines; ++l) {
-    const size_t *ln = in->line_conn + l * (size_t)(pin + 1);
-    size_t x = edge_entry(&edges, ln[0], ln[1]);
-    if (x != SIZE_MAX && edge_line[edges.id[x]] == SIZE_MAX) edge_line[edges.id[x]] = l;
-  }
-  HOC_TRY_GOTO(split_face_edges(in, &edges, edge_line, elem_edge, edge_new), done);
+  HOC_ALLOC_GOTO(line_edge, in->n_lines + 1, done);
+  HOC_TRY_GOTO(hoc_mesh_edges(in, elem_edge, edge_new, edge_line, line_edge, &n_edges), done);
   /* corners (at most the source's nodes), edge nodes, interior nodes */
-  HOC_TRY_GOTO(hoc_node_builder_reserve(&b, in->n_nodes + edges.n_edges * (size_t)(p - 1) +
+  HOC_TRY_GOTO(hoc_node_builder_reserve(&b, in->n_nodes + n_edges * (size_t)(p - 1) +
                                                 ne * (size_t)(np - 3 * p)),
                done);
   /* vertices keep their classification and parameters */
@@ -290,8 +300,7 @@ static hoc_status reinterpolate(const hoc_mesh *in, int p, hoc_nodeset set, hoc_
   HOC_ALLOC_GOTO(lcurve, in->n_lines + 1, done);
   for (size_t l = 0; l < in->n_lines; ++l) {
     const size_t *ln = in->line_conn + l * (size_t)(pin + 1);
-    size_t x = edge_entry(&edges, ln[0], ln[1]);
-    size_t id = x == SIZE_MAX ? SIZE_MAX : edges.id[x];
+    size_t id = line_edge[l];
     if (p > 1 && id == SIZE_MAX) continue; /* a curve no element touches */
     if (vmap[ln[0]] == SIZE_MAX || vmap[ln[1]] == SIZE_MAX) continue;
     size_t *dst = lconn + nl * (size_t)(p + 1);
@@ -343,10 +352,10 @@ done:
   free(edge_first);
   free(edge_a);
   hoc_node_builder_free(&b);
-  edge_table_free(&edges);
   free(elem_edge);
   free(edge_new);
   free(edge_line);
+  free(line_edge);
   return status;
 }
 

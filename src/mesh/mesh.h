@@ -95,6 +95,15 @@ hoc_status hoc_mesh_alloc(hoc_model *model, int order, size_t n_nodes, size_t n_
  *  at the new set's reference nodes, mapped onto the CAD. */
 hoc_status hoc_mesh_convert_nodeset(const hoc_mesh *mesh, hoc_nodeset set, hoc_mesh **out);
 
+/** Numbers of the edges between the elements' corners: elem_edge[3 e + k]
+ *  is element e's edge k (corner k to k + 1), first[3 e + k] whether e is
+ *  the first element using it; edge_line[edge] (room for 3 n_elems + 1) the
+ *  first line on it or SIZE_MAX, line_edge[line] its edge or SIZE_MAX (no
+ *  element uses it). An edge on no CAD curve that elements of two faces
+ *  share has a number on each face (a node lies on one face). */
+hoc_status hoc_mesh_edges(const hoc_mesh *mesh, size_t *elem_edge, unsigned char *first,
+                          size_t *edge_line, size_t *line_edge, size_t *n_edges);
+
 /** Classified nodes with parameters, grown one at a time (the input of a
  *  hoc_mesh_source being built). */
 typedef struct hoc_node_builder {

@@ -165,15 +165,14 @@ done:
   return status;
 }
 
-/* A node on face A that triangles of face B also use (gmsh 5.0 does this
+/* A node on face A that triangles of face B also use (gmsh 4.8 and 5.0 do this
  * where two faces' triangulations share an edge that is on no CAD curve,
  * e.g. two faces bounded by the same two curves: its high-order edge node
  * is made once, on the first face) gets a copy on face B, without
  * parameters, so that it is located on B like any node the file gives no
- * parameters. Grows the raw arrays and dim/ent; *n_copies is how many. */
+ * parameters. Grows the raw arrays and dim/ent. */
 static hoc_status own_face_nodes(const hoc_model *model, hoc_msh_raw *raw, const int *tface,
-                                 signed char **dim, int **ent, size_t *n_copies) {
-  *n_copies = 0;
+                                 signed char **dim, int **ent) {
   size_t np = (size_t)(raw->order + 1) * (size_t)(raw->order + 2) / 2, n = raw->n_nodes, extra = 0;
   for (size_t e = 0; e < raw->n_tris; ++e)
     for (size_t k = 0; k < np; ++k) {
@@ -224,7 +223,6 @@ static hoc_status own_face_nodes(const hoc_model *model, hoc_msh_raw *raw, const
       *i = c;
     }
   raw->n_nodes = m;
-  *n_copies = m - n;
 done:
   hoc_hash_free(&h);
   return status;
@@ -272,8 +270,7 @@ hoc_status hoc_mesh_read_msh(hoc_model *model, const char *path, hoc_mesh **mesh
       goto done;
     }
   }
-  size_t n_copies;
-  HOC_TRY_GOTO(own_face_nodes(model, &raw, tface, &dim, &ent, &n_copies), done);
+  HOC_TRY_GOTO(own_face_nodes(model, &raw, tface, &dim, &ent), done);
   size_t nl = 0;
   HOC_ALLOC_GOTO(lconn, raw.n_lines * (size_t)(raw.order + 1) + 1, done);
   HOC_ALLOC_GOTO(lcurve, raw.n_lines + 1, done);

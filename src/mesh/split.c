@@ -17,44 +17,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* One element edge: its corners (lo < hi), the face it is on (-1 on a CAD
- * curve, where the faces on both sides share it) and where it came from. */
-typedef struct edge_ref {
-  size_t lo, hi;
-  int face;
-  size_t at; /* 3 e + k */
-} edge_ref;
-
-static int edge_ref_cmp(const void *pa, const void *pb) {
-  const edge_ref *a = pa, *b = pb;
-  if (a->lo != b->lo) return a->lo < b->lo ? -1 : 1;
-  if (a->hi != b->hi) return a->hi < b->hi ? -1 : 1;
-  if (a->face != b->face) return a->face < b->face ? -1 : 1;
-  return a->at < b->at ? -1 : a->at > b->at;
-}
-
-static int pair_cmp(const void *pa, const void *pb) {
-  const size_t *a = pa, *b = pb;
-  if (a[0] != b[0]) return a[0] < b[0] ? -1 : 1;
-  if (a[1] != b[1]) return a[1] < b[1] ? -1 : 1;
-  return 0;
-}
-
-/* The line between a and b in the sorted (lo, hi, line) triples, or SIZE_MAX. */
-static size_t find_line(const size_t *sorted, size_t n, size_t a, size_t b) {
-  size_t key[2] = {a < b ? a : b, a < b ? b : a}, lo = 0, hi = n;
-  while (lo < hi) {
-    size_t mid = (lo + hi) / 2;
-    int c = pair_cmp(sorted + 3 * mid, key);
-    if (c == 0) return sorted[3 * mid + 2];
-    if (c < 0)
-      lo = mid + 1;
-    else
-      hi = mid;
-  }
-  return SIZE_MAX;
-}
-
 /* What the split needs of the mesh while building children. */
 typedef struct splitter {
   const hoc_mesh *m;
@@ -199,10 +161,9 @@ hoc_status hoc_mesh_split(const hoc_mesh *mesh, const unsigned char *elements, h
   S.m = m;
   S.p = p;
   S.np = np;
-  size_t *lines = NULL, *edge_of = NULL, *edge_line = NULL, *mid = NULL, *conn = NULL;
+  size_t *edge_of = NULL, *edge_line = NULL, *line_edge = NULL, *mid = NULL, *conn = NULL;
   size_t *lconn = NULL, *remap = NULL;
-  edge_ref *refs = NULL;
-  unsigned char *marked = NULL, *used = NULL;
+  unsigned char *first = NULL, *marked = NULL, *used = NULL;
   int *eface = NULL, *lcurve = NULL;
   double *rs = NULL, *s1 = NULL;
   HOC_ALLOC_GOTO(rs, 2 * (size_t)np, done);
@@ -211,40 +172,13 @@ hoc_status hoc_mesh_split(const hoc_mesh *mesh, const unsigned char *elements, h
   HOC_TRY_GOTO(hoc_edge_nodes(p, m->nodeset, s1), done);
   S.rs = rs;
   S.s1 = s1;
-  /* lines by their ends */
-  HOC_ALLOC_GOTO(lines, 3 * nl + 1, done);
-  for (size_t l = 0; l < nl; ++l) {
-    size_t a = m->line_conn[l * (size_t)(p + 1)], b = m->line_conn[l * (size_t)(p + 1) + 1];
-    lines[3 * l] = a < b ? a : b;
-    lines[3 * l + 1] = a < b ? b : a;
-    lines[3 * l + 2] = l;
-  }
-  qsort(lines, nl, 3 * sizeof *lines, pair_cmp);
-  /* edges: element edges grouped by (corners, face or -1 on a curve) */
-  HOC_ALLOC_GOTO(refs, 3 * ne + 1, done);
-  for (size_t e = 0; e < ne; ++e)
-    for (int k = 0; k < 3; ++k) {
-      size_t a = m->conn[e * (size_t)np + (size_t)k];
-      size_t b = m->conn[e * (size_t)np + (size_t)(k + 1) % 3];
-      edge_ref *r = &refs[3 * e + (size_t)k];
-      r->lo = a < b ? a : b;
-      r->hi = a < b ? b : a;
-      r->face = find_line(lines, nl, a, b) == SIZE_MAX ? m->elem_face[e] : -1;
-      r->at = 3 * e + (size_t)k;
-    }
-  qsort(refs, 3 * ne, sizeof *refs, edge_ref_cmp);
+  /* edges: shared across a CAD curve, else numbered per face */
+  size_t n_edges;
   HOC_ALLOC_GOTO(edge_of, 3 * ne + 1, done);
+  HOC_ALLOC_GOTO(first, 3 * ne + 1, done);
   HOC_ALLOC_GOTO(edge_line, 3 * ne + 1, done);
-  size_t n_edges = 0;
-  for (size_t x = 0; x < 3 * ne; ++x) {
-    if (x == 0 || refs[x].lo != refs[x - 1].lo || refs[x].hi != refs[x - 1].hi ||
-        refs[x].face != refs[x - 1].face) {
-      edge_line[n_edges] =
-          refs[x].face < 0 ? find_line(lines, nl, refs[x].lo, refs[x].hi) : SIZE_MAX;
-      ++n_edges;
-    }
-    edge_of[refs[x].at] = n_edges - 1;
-  }
+  HOC_ALLOC_GOTO(line_edge, nl + 1, done);
+  HOC_TRY_GOTO(hoc_mesh_edges(m, edge_of, first, edge_line, line_edge, &n_edges), done);
   S.edge_of = edge_of;
   S.edge_line = edge_line;
   /* marks: every edge of a flagged element; then all edges of an element
@@ -368,25 +302,7 @@ hoc_status hoc_mesh_split(const hoc_mesh *mesh, const unsigned char *elements, h
   for (size_t l = 0; l < nl; ++l) {
     const size_t *ln = m->line_conn + l * (size_t)(p + 1);
     size_t a = ln[0], b = ln[1];
-    size_t cut = SIZE_MAX;
-    /* the curve edge's number through the sorted refs */
-    size_t lo = 0, hi = 3 * ne, klo = a < b ? a : b, khi = a < b ? b : a;
-    while (lo < hi) {
-      size_t x = (lo + hi) / 2;
-      int c = refs[x].lo != klo    ? (refs[x].lo < klo ? -1 : 1)
-              : refs[x].hi != khi  ? (refs[x].hi < khi ? -1 : 1)
-              : refs[x].face != -1 ? 1
-                                   : 0;
-      if (c == 0) {
-        size_t id = edge_of[refs[x].at];
-        if (marked[id]) cut = mid[id];
-        break;
-      }
-      if (c < 0)
-        lo = x + 1;
-      else
-        hi = x;
-    }
+    size_t id = line_edge[l], cut = id != SIZE_MAX && marked[id] ? mid[id] : SIZE_MAX;
     if (cut == SIZE_MAX) {
       memcpy(lconn + ml * (size_t)(p + 1), ln, (size_t)(p + 1) * sizeof *lconn);
       lcurve[ml++] = m->line_curve[l];
@@ -460,8 +376,8 @@ done:
   free(S.new_start);
   free(rs);
   free(s1);
-  free(lines);
-  free(refs);
+  free(line_edge);
+  free(first);
   free(edge_of);
   free(edge_line);
   free(marked);
