@@ -115,6 +115,12 @@ typedef struct hoc_linear_options {
 /** Fill options with defaults (all "choose", order 1, no progress). */
 void hoc_linear_options_default(hoc_linear_options *options);
 
+/** The edge lengths the linear mesher uses for these options on this model:
+ *  size_max, or the bounding-box diagonal / 20 if 0; size_min, or a tenth
+ *  of that if 0. */
+void hoc_linear_sizes(const hoc_model *model, const hoc_linear_options *options, double *size_max,
+                      double *size_min);
+
 /** Mesh every face of the model with linear triangles. Faces the kernel
  *  cannot mesh are skipped and counted in hoc_mesh_num_failed_faces().
  *  @param[in]  model    the CAD model; it must outlive the mesh

@@ -951,10 +951,9 @@ static int cmd_mesh(int argc, char **argv) {
      * times finer (the bottle's thread curls through 130 degrees within
      * 0.03 at its end, where the default minimum of 0.4 kept it coarse) */
     if (!(o.size_min > 0)) {
-      double diag = sqrt((bb[3] - bb[0]) * (bb[3] - bb[0]) + (bb[4] - bb[1]) * (bb[4] - bb[1]) +
-                         (bb[5] - bb[2]) * (bb[5] - bb[2]));
-      double size_max = o.size > 0 ? o.size : diag / 20;
-      lo.size_min = (lo.size_min > 0 ? lo.size_min : size_max / 10) / 10;
+      double size_max, size_min;
+      hoc_linear_sizes(model, &lo, &size_max, &size_min);
+      lo.size_min = size_min / 10;
     }
     hoc_mesh_destroy(&raised);
     hoc_mesh_destroy(&ho);

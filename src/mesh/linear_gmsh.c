@@ -18,6 +18,12 @@ void hoc_linear_options_default(hoc_linear_options *o) {
   o->order = 1;
 }
 
+void hoc_linear_sizes(const hoc_model *model, const hoc_linear_options *o, double *size_max,
+                      double *size_min) {
+  *size_max = o->size_max > 0 ? o->size_max : model->diagonal / 20;
+  *size_min = o->size_min > 0 ? o->size_min : *size_max / 10;
+}
+
 /* Default elements per 2 pi of curvature radius: enough that the linear
  * mesh follows curved faces and the curved elements of order p stay valid. */
 static double default_curvature(int order) {
@@ -152,8 +158,8 @@ static hoc_status generate_once(hoc_model *model, const hoc_linear_options *opti
             "curvature elements per 2 pi must be in 0..1000");
   HOC_CHECK(o.order >= 1 && o.order <= HOC_MAX_ORDER, HOC_ERR_ARGUMENT,
             "order %d out of range 1..%d", o.order, HOC_MAX_ORDER);
-  double hmax = o.size_max > 0 ? o.size_max : model->diagonal / 20;
-  double hmin = o.size_min > 0 ? o.size_min : hmax / 10;
+  double hmax, hmin;
+  hoc_linear_sizes(model, &o, &hmax, &hmin);
   HOC_CHECK(hmin <= hmax, HOC_ERR_ARGUMENT, "minimum size %g exceeds maximum size %g", hmin, hmax);
   HOC_CHECK(hmax >= 1e-6 * model->diagonal, HOC_ERR_ARGUMENT,
             "mesh size %g is too small for a model of size %g (at most 10^6 edges across)", hmax,
