@@ -223,16 +223,32 @@ int hoc_mesh_element_face_tag(const hoc_mesh *mesh, size_t e);
 hoc_status hoc_mesh_refine_bounds(const hoc_mesh *mesh, const unsigned char *elements,
                                   double factor, double *face_size);
 
+/** How hoc_mesh_split keeps the mesh conforming. Each flagged element is
+ *  split in four at the midpoints of its edges either way. */
+typedef enum hoc_split_kind {
+  /** Red-green: an element with two split edges gets its third split too;
+   *  an element with one split edge is cut in two through its midpoint and
+   *  the opposite corner; flagged elements give four children similar to
+   *  themselves. */
+  HOC_SPLIT_RED_GREEN = 0,
+  /** Longest edge: an element with a split edge gets its longest edge
+   *  (corner to corner in space) split too, and is bisected there first:
+   *  two, three or four children. Slivers are cut across their length,
+   *  never along it. */
+  HOC_SPLIT_LONGEST_EDGE = 1
+} hoc_split_kind;
+
 /** Local refinement: each flagged element split in four at the midpoints
- *  of its edges, its neighbours in two (one split edge: through the
- *  midpoint and the opposite corner) or four (more), so that the mesh stays
+ *  of its edges, its neighbours as `kind` says, so that the mesh stays
  *  conforming. The new elements' nodes are placed as hoc_mesh_elevate
  *  places them, straight between their corners in the parent's (u, v) (in
  *  the curve's t on curve edges; midpoints halfway); elements not split
- *  keep all their nodes. Same order and node set as the input.
+ *  keep all their nodes, and the children follow in their parent's place.
+ *  Same order and node set as the input.
  *  @param[in]  elements  per-element flag (e.g. tangled from hoc_mesh_measure)
  *  @param[out] out       the new mesh (NULL on failure) */
-hoc_status hoc_mesh_split(const hoc_mesh *mesh, const unsigned char *elements, hoc_mesh **out);
+hoc_status hoc_mesh_split(const hoc_mesh *mesh, const unsigned char *elements, hoc_split_kind kind,
+                          hoc_mesh **out);
 
 /** A corner of an element at a CAD vertex where both of the element's
  *  edges lie on CAD curves that meet there at a small angle (a cusp of the

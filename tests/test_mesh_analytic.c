@@ -188,14 +188,39 @@ static double uv_gap(const hoc_cad_face *f, const double *a, const double *b) {
   return g;
 }
 
+/* Signed area of an element's corner triangle in its (u, v). */
+static double uv_area(const hoc_mesh *m, size_t e) {
+  const double *c = m->elem_uv + 2 * e * (size_t)m->np;
+  return 0.5 * ((c[2] - c[0]) * (c[5] - c[1]) - (c[4] - c[0]) * (c[3] - c[1]));
+}
+
+/* The longest of element e's corner edges in space (the first on ties). */
+static int longest_corner_edge(const hoc_mesh *m, size_t e) {
+  const size_t *c = m->conn + e * (size_t)m->np;
+  int best = 0;
+  double lmax = -1;
+  for (int k = 0; k < 3; ++k) {
+    double l = 0;
+    for (int d = 0; d < 3; ++d) {
+      double x = m->xyz[3 * c[k] + (size_t)d] - m->xyz[3 * c[(k + 1) % 3] + (size_t)d];
+      l += x * x;
+    }
+    if (l > lmax) lmax = l, best = k;
+  }
+  return best;
+}
+
 /* Local refinement on the torus (two seams; every edge has two elements):
- * each of two flagged elements split in four, their three neighbours in
- * two; the mesh conforming (every corner edge in two elements, with the
- * same high-order nodes), the elements not split unchanged, the new ones
- * straight in (u, v) between their parent's corners, every node on the
- * surface; without flags, the same mesh. */
-static void test_split(void) {
+ * each of two flagged elements split in four and their three neighbours
+ * split too (red-green: in two; by longest edge: bisected there first);
+ * the mesh conforming (every corner edge in two elements, with the same
+ * high-order nodes), the elements not split unchanged and in order, each
+ * split one followed by children that tile it in (u, v), with nodes
+ * straight between their corners, every node on the surface; without
+ * flags, the same mesh. */
+static void test_split(hoc_split_kind kind) {
   const double a = 3, b = 1;
+  const int bisecting = kind == HOC_SPLIT_LONGEST_EDGE;
   hoc_model *model;
   CHECK_OK(hoc_cad_create_analytic(HOC_ANALYTIC_TORUS, a, b, &model));
   if (!model) return;
@@ -206,10 +231,11 @@ static void test_split(void) {
   if (!m) goto out;
   size_t ne = m->n_elems, np = (size_t)m->np;
   unsigned char *flag = calloc(ne, 1);
-  CHECK_STATUS(hoc_mesh_split(m, NULL, &s), HOC_ERR_ARGUMENT);
-  CHECK_STATUS(hoc_mesh_split(m, flag, NULL), HOC_ERR_ARGUMENT);
+  CHECK_STATUS(hoc_mesh_split(m, NULL, kind, &s), HOC_ERR_ARGUMENT);
+  CHECK_STATUS(hoc_mesh_split(m, flag, kind, NULL), HOC_ERR_ARGUMENT);
+  CHECK_STATUS(hoc_mesh_split(m, flag, (hoc_split_kind)7, &s), HOC_ERR_ARGUMENT);
   /* nothing flagged: the same mesh */
-  CHECK_OK(hoc_mesh_split(m, flag, &s));
+  CHECK_OK(hoc_mesh_split(m, flag, kind, &s));
   if (s) {
     int same = s->n_elems == ne && s->n_nodes == m->n_nodes;
     for (size_t i = 0; same && i < ne * np; ++i)
@@ -219,9 +245,9 @@ static void test_split(void) {
   hoc_mesh_destroy(&s);
   size_t flagged[2] = {0, ne / 2 + 5};
   flag[flagged[0]] = flag[flagged[1]] = 1;
-  CHECK_OK(hoc_mesh_split(m, flag, &s));
+  CHECK_OK(hoc_mesh_split(m, flag, kind, &s));
   if (!s) goto done;
-  CHECK(s->n_elems == ne + 2 * (3 + 3));
+  if (!bisecting) CHECK(s->n_elems == ne + 2 * (3 + 3));
   /* (the grid has no curve lines: test_mesh_gmsh splits edges on curves) */
   /* conforming: each corner edge in exactly two elements, the same nodes */
   size_t bad = 0;
@@ -242,12 +268,14 @@ static void test_split(void) {
       bad += found != 1;
     }
   CHECK(bad == 0);
-  /* parents in order: unsplit ones unchanged, children straight in (u, v) */
+  /* parents in order: unsplit ones unchanged; children straight in (u, v),
+   * tiling their parent (areas summing to its own), red-green in four or
+   * two, bisected ones never keeping the parent's longest edge whole */
   double rs[2 * 10];
   CHECK_OK(hoc_tri_nodes(3, HOC_NODES_EQUISPACED, rs));
-  size_t j = 0, kept = 0;
+  size_t j = 0, kept = 0, wrong_kids = 0, whole_longest = 0;
   double gap = 0;
-  for (size_t e = 0; e < ne; ++e) {
+  for (size_t e = 0; e < ne && j < s->n_elems; ++e) {
     const size_t *c = m->conn + e * np, *c2 = s->conn + j * np;
     int same = 1;
     for (size_t k = 0; k < np; ++k)
@@ -257,10 +285,14 @@ static void test_split(void) {
       ++j;
       continue;
     }
-    size_t n_kids = flag[e] ? 4 : 2;
     const double *P = m->elem_uv + 2 * e * np; /* corners 0..2 */
-    for (size_t kid = 0; kid < n_kids; ++kid, ++j) {
+    double area = uv_area(m, e), sum = 0;
+    int lk = longest_corner_edge(m, e);
+    const double *la = m->xyz + 3 * c[lk], *lb = m->xyz + 3 * c[(lk + 1) % 3];
+    size_t n_kids = 0, first = j;
+    for (; j < s->n_elems && sum < area * (1 - 1e-9); ++j, ++n_kids) {
       const double *C = s->elem_uv + 2 * j * np;
+      sum += uv_area(s, j);
       /* the child's corners in the parent's (u, v); its nodes affine in them */
       for (size_t k = 0; k < np; ++k) {
         double r = rs[2 * k], t = rs[2 * k + 1], want[2];
@@ -268,16 +300,30 @@ static void test_split(void) {
           want[d] = C[d] + r * (C[2 + d] - C[d]) + t * (C[4 + d] - C[d]);
         gap = fmax(gap, uv_gap(f, C + 2 * k, want));
       }
+      int has_a = 0, has_b = 0;
+      for (int k = 0; k < 3; ++k) {
+        const double *x = s->xyz + 3 * s->conn[j * np + (size_t)k];
+        has_a |= !memcmp(x, la, 3 * sizeof(double));
+        has_b |= !memcmp(x, lb, 3 * sizeof(double));
+      }
+      whole_longest += has_a && has_b;
     }
-    if (flag[e]) { /* the first child: corner 0, then the midpoint of edge 0 */
-      const double *C = s->elem_uv + 2 * (j - 4) * np;
+    gap = fmax(gap, fabs(sum - area) / area);
+    if (bisecting)
+      wrong_kids += n_kids < 2 || n_kids > 4 || (flag[e] && n_kids != 4);
+    else
+      wrong_kids += n_kids != (flag[e] ? 4u : 2u);
+    if (flag[e] && !bisecting) { /* the first child: corner 0, then the midpoint of edge 0 */
+      const double *C = s->elem_uv + 2 * first * np;
       double mid[2] = {0.5 * (P[0] + P[2]), 0.5 * (P[1] + P[3])};
       gap = fmax(gap, uv_gap(f, C, P));
       gap = fmax(gap, uv_gap(f, C + 2, mid));
     }
   }
   CHECK(j == s->n_elems);
-  CHECK(kept == ne - 2 - 2 * 3);
+  CHECK(wrong_kids == 0);
+  CHECK(bisecting ? kept <= ne - 2 - 2 * 3 : kept == ne - 2 - 2 * 3);
+  CHECK(!bisecting || whole_longest == 0);
   CHECK(gap <= 1e-12);
   double worst = 0, dist;
   for (size_t i = 0; i < s->n_nodes; ++i)
@@ -288,10 +334,9 @@ static void test_split(void) {
   hoc_quality_stats st;
   CHECK_OK(hoc_mesh_measure(s, HOC_MEASURE_SHAPE, NULL, NULL, &st));
   CHECK(st.tangled == 0);
-  printf(
-      "split on the torus: %zu -> %zu elements, %zu kept, %zu unmatched edge nodes, uv gap %.2g, "
-      "min q %.3f\n",
-      ne, s->n_elems, kept, bad, gap, st.min);
+  printf("split %s on the torus: %zu -> %zu elements, %zu kept, %zu unmatched edge nodes, uv gap "
+         "%.2g, min q %.3f\n",
+         bisecting ? "at longest edges" : "red-green", ne, s->n_elems, kept, bad, gap, st.min);
 done:
   free(flag);
   hoc_mesh_destroy(&s);
@@ -302,7 +347,8 @@ out:
 }
 
 int main(void) {
-  test_split();
+  test_split(HOC_SPLIT_RED_GREEN);
+  test_split(HOC_SPLIT_LONGEST_EDGE);
   test_topology_detection();
   test_derivatives();
   test_invert();

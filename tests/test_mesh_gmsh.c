@@ -463,23 +463,9 @@ static void test_two_faces_one_edge(void) {
   hoc_model_destroy(&model);
 }
 
-/* Local refinement on a real model: every seventh element split (the
- * neighbours too), lines on the curves halved where their edge is: every
- * line is an edge of an element, with the same nodes, all on its curve;
- * every node on the CAD; no element tangled. */
-static void test_split_on_curves(void) {
-  hoc_model *model = open_bundled("screw.step");
-  if (!model) return;
-  hoc_mesh *lin = NULL, *m = NULL, *s = NULL;
-  CHECK_OK(hoc_mesh_generate_linear(model, NULL, &lin));
-  if (lin) CHECK_OK(hoc_mesh_elevate(lin, 3, HOC_NODES_EQUISPACED, &m));
-  if (!m) goto out;
-  unsigned char *flag = calloc(m->n_elems, 1);
-  for (size_t e = 0; e < m->n_elems; e += 7)
-    flag[e] = 1;
-  CHECK_OK(hoc_mesh_split(m, flag, &s));
-  free(flag);
-  if (!s) goto out;
+/* Every line of split mesh s an edge of an element, with the same nodes,
+ * all on its curve; every node on the CAD; no element tangled. */
+static void check_split_lines(const hoc_model *model, const hoc_mesh *m, const hoc_mesh *s) {
   size_t np = (size_t)s->np, p = (size_t)s->order, unmatched = 0, off_curve = 0;
   for (size_t l = 0; l < s->n_lines; ++l) {
     const size_t *ln = s->line_conn + l * (p + 1);
@@ -507,6 +493,28 @@ static void test_split_on_curves(void) {
   CHECK(s->n_elems > m->n_elems && s->n_lines > m->n_lines);
   CHECK(unmatched == 0 && off_curve == 0);
   check_on_cad_untangled(model, s);
+}
+
+/* Local refinement on a real model, of both kinds: every seventh element
+ * split (the neighbours too), lines on the curves halved where their edge is: every
+ * line is an edge of an element, with the same nodes, all on its curve;
+ * every node on the CAD; no element tangled. */
+static void test_split_on_curves(void) {
+  hoc_model *model = open_bundled("screw.step");
+  if (!model) return;
+  hoc_mesh *lin = NULL, *m = NULL, *s = NULL;
+  CHECK_OK(hoc_mesh_generate_linear(model, NULL, &lin));
+  if (lin) CHECK_OK(hoc_mesh_elevate(lin, 3, HOC_NODES_EQUISPACED, &m));
+  if (!m) goto out;
+  unsigned char *flag = calloc(m->n_elems, 1);
+  for (size_t e = 0; e < m->n_elems; e += 7)
+    flag[e] = 1;
+  for (int kind = 0; kind < 2; ++kind) {
+    hoc_mesh_destroy(&s);
+    CHECK_OK(hoc_mesh_split(m, flag, (hoc_split_kind)kind, &s));
+    if (s) check_split_lines(model, m, s);
+  }
+  free(flag);
 out:
   hoc_mesh_destroy(&s);
   hoc_mesh_destroy(&m);

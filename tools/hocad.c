@@ -275,14 +275,18 @@ static const char *usage_optimize =
     "elements stay tangled, it also starts from the input's own nodes and keeps\n"
     "the result with fewer tangled elements. Elements still tangled then are\n"
     "split (a 'split' stage; see --refinements): the new elements' nodes are\n"
-    "placed straight between their corners, every other node stays.\n"
+    "placed straight between their corners, every other node stays. Splits are\n"
+    "red-green first; if elements stay tangled, they are made again from the\n"
+    "unsplit mesh at the longest edges (which cuts slivers across), and the\n"
+    "result with the fewest tangled elements is kept.\n"
     "\n"
     "options:\n"
     "  -o, --output F.msh   optimized mesh (MSH 4.1), or F.vtu\n"
     "  --keep-nodes         always start from the input's own high-order nodes\n"
     "  --refinements N      if elements stay tangled, split them in four (their\n"
-    "                       neighbours in two or four) and optimise again, at most\n"
-    "                       N times (default 2; 0 keeps the input's elements)\n"
+    "                       neighbours in two to four) and optimise again, at most\n"
+    "                       N times of each kind (default 2; 0 keeps the input's\n"
+    "                       elements)\n"
     "  --vtu F.vtu          also a VTU with q per element\n"
     "  --json F.json        the report as JSON\n"
     "  --measure M          shape | oddy (default shape)\n" OPTIMIZE_OPTIONS
@@ -1131,13 +1135,14 @@ static int optimize_starts(const options *o, report *r, hoc_mesh **mesh) {
 }
 
 /* Where `optimize` leaves tangled elements: split them in four (their
- * neighbours in two or four, to keep the mesh conforming; children keep
- * their parent's curved map) and optimise again. The next split starts
- * from this result; *best and *best_r hold the result with the fewest
- * tangled elements so far (the earlier on a tie). The report keeps its
- * input stage, then "split" and "optimized". */
-static int split_tangled(const options *o, report *r, hoc_mesh **mesh, hoc_mesh **best,
-                         report *best_r) {
+ * neighbours as `kind` says, to keep the mesh conforming; children placed
+ * straight between their corners) and optimise again. The next split
+ * starts from this result; *best and *best_r hold the result with the
+ * fewest tangled elements so far (the earlier on a tie); `base` (the
+ * unsplit result) is never freed here. The report keeps its input stage,
+ * then "split" and "optimized". */
+static int split_tangled(const options *o, report *r, hoc_split_kind kind, hoc_mesh **mesh,
+                         const hoc_mesh *base, hoc_mesh **best, report *best_r) {
   size_t ne = hoc_mesh_num_elements(*mesh), total = 0;
   unsigned char *tangled = calloc(ne ? ne : 1, 1);
   if (!tangled) {
@@ -1147,7 +1152,7 @@ static int split_tangled(const options *o, report *r, hoc_mesh **mesh, hoc_mesh 
   double t0 = now();
   hoc_mesh *fine = NULL;
   hoc_status st = hoc_mesh_measure(*mesh, o->measure, NULL, tangled, NULL);
-  if (st == HOC_OK) st = hoc_mesh_split(*mesh, tangled, &fine);
+  if (st == HOC_OK) st = hoc_mesh_split(*mesh, tangled, kind, &fine);
   if (st != HOC_OK) {
     free(tangled);
     return fail(st, 0);
@@ -1157,9 +1162,10 @@ static int split_tangled(const options *o, report *r, hoc_mesh **mesh, hoc_mesh 
   r->refinements++;
   if (!o->quiet) {
     fprintf(stderr,
-            "%s: %zu element(s) still tangled; splitting them and their neighbours (%zu -> %zu "
-            "elements) and optimising again (refinement %d of at most %d): faces",
-            program, total, ne, hoc_mesh_num_elements(fine), r->refinements, o->refinements);
+            "%s: %zu element(s) still tangled; splitting them and their neighbours %s (%zu -> "
+            "%zu elements) and optimising again (refinement %d): faces",
+            program, total, kind == HOC_SPLIT_RED_GREEN ? "red-green" : "at their longest edges",
+            ne, hoc_mesh_num_elements(fine), r->refinements);
     print_faces(*mesh, tangled);
   }
   free(tangled);
@@ -1170,14 +1176,51 @@ static int split_tangled(const options *o, report *r, hoc_mesh **mesh, hoc_mesh 
     hoc_mesh_destroy(&fine);
     return code;
   }
-  if (*mesh != *best) hoc_mesh_destroy(mesh);
+  if (*mesh != *best && *mesh != base) hoc_mesh_destroy(mesh);
   *mesh = fine;
   if (r->stages[r->n - 1].stats.tangled < best_r->stages[best_r->n - 1].stats.tangled) {
-    hoc_mesh_destroy(best);
+    if (*best != base) hoc_mesh_destroy(best);
     *best = fine;
     *best_r = *r;
   }
   return EXIT_OK;
+}
+
+/* Up to o->refinements splits red-green from the optimised mesh *mesh and,
+ * if elements stay tangled, as many at longest edges from the same mesh
+ * (red-green keeps shapes, but its two-way cuts make slivers thinner;
+ * bisection cuts slivers across). *mesh and *r become the result with the
+ * fewest tangled elements (the earlier on a tie); r->refinements counts
+ * every split made. */
+static int refine_tangled(const options *o, report *r, hoc_mesh **mesh) {
+  hoc_mesh *base = *mesh, *best = base, *cur = base;
+  report base_r = *r, best_r = *r;
+  int code = EXIT_OK, made = 0;
+  static const hoc_split_kind kinds[2] = {HOC_SPLIT_RED_GREEN, HOC_SPLIT_LONGEST_EDGE};
+  for (int k = 0; k < 2 && !code && best_r.stages[best_r.n - 1].stats.tangled; ++k) {
+    if (cur != best && cur != base) hoc_mesh_destroy(&cur);
+    cur = base;
+    *r = base_r;
+    r->refinements = made;
+    for (int i = 0; i < o->refinements && !code && r->stages[r->n - 1].stats.tangled; ++i)
+      code = split_tangled(o, r, kinds[k], &cur, base, &best, &best_r);
+    made = r->refinements;
+  }
+  int improved = best != base;
+  if (cur != best && cur != base) hoc_mesh_destroy(&cur);
+  if (improved) hoc_mesh_destroy(&base);
+  *mesh = best;
+  *r = best_r;
+  r->refinements = made;
+  if (!code && !o->quiet && improved)
+    fprintf(stderr,
+            "%s: note: kept the mesh of refinement %d of %d, which has the fewest tangled "
+            "elements\n",
+            program, best_r.refinements, made);
+  else if (!code && !o->quiet)
+    fprintf(stderr, "%s: note: splitting left no fewer tangled elements: kept the mesh before it\n",
+            program);
+  return code;
 }
 
 static int cmd_optimize(int argc, char **argv) {
@@ -1216,29 +1259,9 @@ static int cmd_optimize(int argc, char **argv) {
   }
   if ((code = measure_stage(&o, &r, "input", mesh, now() - t0, NULL))) goto done;
   if ((code = optimize_starts(&o, &r, &mesh))) goto done;
-  if (r.stages[r.n - 1].stats.tangled && o.refinements > 0) {
-    hoc_mesh *best = mesh;
-    report best_r = r;
-    while (!code && r.stages[r.n - 1].stats.tangled && r.refinements < o.refinements)
-      code = split_tangled(&o, &r, &mesh, &best, &best_r);
-    if (mesh != best) {
-      hoc_mesh_destroy(&mesh);
-      mesh = best;
-      int made = r.refinements;
-      r = best_r;
-      r.refinements = made;
-      if (!code && !o.quiet && best_r.refinements)
-        fprintf(stderr,
-                "%s: note: kept the mesh of refinement %d of %d, which has the fewest "
-                "tangled elements\n",
-                program, best_r.refinements, made);
-      else if (!code && !o.quiet)
-        fprintf(stderr,
-                "%s: note: splitting left no fewer tangled elements: kept the mesh before it\n",
-                program);
-    }
-    if (code) goto done;
-  }
+  if (r.stages[r.n - 1].stats.tangled && o.refinements > 0 &&
+      (code = refine_tangled(&o, &r, &mesh)))
+    goto done;
   if (!o.quiet) {
     printf("mesh %s on %s: %zu nodes\n", o.mesh_in, o.model, hoc_mesh_num_nodes(mesh));
     print_table(&r);

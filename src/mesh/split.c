@@ -1,13 +1,12 @@
 /* Local refinement: flagged elements split in four at their edges'
- * midpoints, neighbours split in two (one split edge) or four (more) so
- * that the mesh stays conforming. The children's nodes are placed as
- * elevation places them, straight between their corners in the parent's
- * (u, v) (in the curve's t along curve edges); every element not split
- * keeps its nodes. (Children that kept their parent's curved map were
- * measured worse: a map valid at its quadrature points and nodes can fold
- * between them, as an optimised curve edge whose t is not monotone does,
- * and its pieces then measure tangled.)
- * SPDX-License-Identifier: GPL-2.0-or-later */
+ * midpoints, neighbours split so that the mesh stays conforming: red-green
+ * (in two for one split edge, else in four) or by their longest edge
+ * (bisected there first, then each half at its other split edge). The children's nodes are placed
+ * as elevation places them, straight between their corners in the parent's (u, v) (in the curve's t
+ * along curve edges); every element not split keeps its nodes. (Children that kept their parent's
+ * curved map were measured worse: a map valid at its quadrature points and nodes can fold between
+ * them, as an optimised curve edge whose t is not monotone does, and its pieces then measure
+ * tangled.) SPDX-License-Identifier: GPL-2.0-or-later */
 #include "basis/basis.h"
 #include "core/hash.h"
 #include "mesh/mesh.h"
@@ -149,10 +148,46 @@ static hoc_status child(splitter *S, size_t e, const size_t c[3], const double x
   return HOC_OK;
 }
 
-hoc_status hoc_mesh_split(const hoc_mesh *mesh, const unsigned char *elements, hoc_mesh **out) {
+/* A triangle during splitting: corner nodes and their parent coordinates. */
+typedef struct tri {
+  size_t c[3];
+  double x[3][2];
+} tri;
+
+/* t cut in two through the midpoint (node mid, parent coordinates mx) of
+ * its edge k and the opposite corner; orientation kept. */
+static void bisect(const tri *t, int k, size_t mid, const double mx[2], tri h[2]) {
+  int b = (k + 1) % 3, o = (k + 2) % 3;
+  tri h0 = {{t->c[k], mid, t->c[o]},
+            {{t->x[k][0], t->x[k][1]}, {mx[0], mx[1]}, {t->x[o][0], t->x[o][1]}}};
+  tri h1 = {{mid, t->c[b], t->c[o]},
+            {{mx[0], mx[1]}, {t->x[b][0], t->x[b][1]}, {t->x[o][0], t->x[o][1]}}};
+  h[0] = h0;
+  h[1] = h1;
+}
+
+/* The longest of element e's edges (corner to corner in space; the first on ties). */
+static int longest_edge(const hoc_mesh *m, size_t e) {
+  const size_t *cn = m->conn + e * (size_t)m->np;
+  int best = 0;
+  double lmax = -1;
+  for (int k = 0; k < 3; ++k) {
+    const double *a = m->xyz + 3 * cn[k], *b = m->xyz + 3 * cn[(k + 1) % 3];
+    double l = (a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) +
+               (a[2] - b[2]) * (a[2] - b[2]);
+    if (l > lmax) lmax = l, best = k;
+  }
+  return best;
+}
+
+hoc_status hoc_mesh_split(const hoc_mesh *mesh, const unsigned char *elements, hoc_split_kind kind,
+                          hoc_mesh **out) {
   HOC_CHECK(out, HOC_ERR_ARGUMENT, "mesh output is NULL");
   *out = NULL;
   HOC_CHECK(mesh && elements, HOC_ERR_ARGUMENT, "no mesh or no element flags");
+  HOC_CHECK(kind == HOC_SPLIT_RED_GREEN || kind == HOC_SPLIT_LONGEST_EDGE, HOC_ERR_ARGUMENT,
+            "unknown split kind %d", (int)kind);
+  const int bisecting = kind == HOC_SPLIT_LONGEST_EDGE;
   const hoc_mesh *m = mesh;
   int p = m->order, np = m->np;
   size_t ne = m->n_elems, nl = m->n_lines;
@@ -164,6 +199,7 @@ hoc_status hoc_mesh_split(const hoc_mesh *mesh, const unsigned char *elements, h
   size_t *edge_of = NULL, *edge_line = NULL, *line_edge = NULL, *mid = NULL, *conn = NULL;
   size_t *lconn = NULL, *remap = NULL;
   unsigned char *first = NULL, *marked = NULL, *used = NULL;
+  int *longest = NULL;
   int *eface = NULL, *lcurve = NULL;
   double *rs = NULL, *s1 = NULL;
   HOC_ALLOC_GOTO(rs, 2 * (size_t)np, done);
@@ -181,14 +217,27 @@ hoc_status hoc_mesh_split(const hoc_mesh *mesh, const unsigned char *elements, h
   HOC_TRY_GOTO(hoc_mesh_edges(m, edge_of, first, edge_line, line_edge, &n_edges), done);
   S.edge_of = edge_of;
   S.edge_line = edge_line;
-  /* marks: every edge of a flagged element; then all edges of an element
-   * with two marked edges, until none has exactly two */
+  /* marks: every edge of a flagged element; then, red-green, all edges of
+   * an element with two marked edges, or, bisecting, the longest edge of an
+   * element with any, until nothing changes */
   HOC_ALLOC_GOTO(marked, n_edges + 1, done);
-  for (size_t e = 0; e < ne; ++e)
+  HOC_ALLOC_GOTO(longest, ne + 1, done);
+  for (size_t e = 0; e < ne; ++e) {
+    longest[e] = longest_edge(m, e);
     if (elements[e])
       for (int k = 0; k < 3; ++k)
         marked[edge_of[3 * e + (size_t)k]] = 1;
-  for (int changed = 1; changed;) {
+  }
+  for (int changed = 1; bisecting && changed;) {
+    changed = 0;
+    for (size_t e = 0; e < ne; ++e) {
+      const size_t *ed = edge_of + 3 * e;
+      if (!(marked[ed[0]] | marked[ed[1]] | marked[ed[2]]) || marked[ed[longest[e]]]) continue;
+      marked[ed[longest[e]]] = 1;
+      changed = 1;
+    }
+  }
+  for (int changed = !bisecting; changed;) {
     changed = 0;
     for (size_t e = 0; e < ne; ++e) {
       const size_t *ed = edge_of + 3 * e;
@@ -228,12 +277,13 @@ hoc_status hoc_mesh_split(const hoc_mesh *mesh, const unsigned char *elements, h
           hoc_node_builder_add(&S.out, HOC_ON_FACE, m->elem_face[e], uv[0], uv[1], &mid[id]), done);
     }
   }
-  /* children: four (red) or two (green: through the split edge's midpoint
-   * and the opposite corner), corners in the parent's order */
+  /* children: red-green four (red) or two (green: through the split edge's
+   * midpoint and the opposite corner); bisecting two to four; corners in
+   * the parent's order */
   size_t n_new_elems = 0;
   for (size_t e = 0; e < ne; ++e) {
     int cnt = marked[edge_of[3 * e]] + marked[edge_of[3 * e + 1]] + marked[edge_of[3 * e + 2]];
-    n_new_elems += cnt == 3 ? 4 : cnt == 1 ? 2 : 1;
+    n_new_elems += cnt == 0 ? 1 : bisecting ? (size_t)cnt + 1 : cnt == 3 ? 4 : 2;
   }
   HOC_ALLOC_GOTO(conn, n_new_elems * (size_t)np + 1, done);
   HOC_ALLOC_GOTO(eface, n_new_elems + 1, done);
@@ -259,7 +309,23 @@ hoc_status hoc_mesh_split(const hoc_mesh *mesh, const unsigned char *elements, h
     size_t kc[4][3];
     double kx[4][3][2];
     int nk;
-    if (cnt == 1) {
+    if (bisecting) { /* at the longest edge, then each half at its marked outer edge */
+      tri t = {{cn[0], cn[1], cn[2]}, {{0, 0}, {1, 0}, {0, 1}}}, h[2], out4[4];
+      int L = longest[e];
+      bisect(&t, L, md[L], mx[L], h);
+      nk = 0;
+      int side[2] = {(L + 2) % 3, (L + 1) % 3}, sk[2] = {2, 1};
+      for (int i = 0; i < 2; ++i) {
+        if (md[side[i]] != SIZE_MAX)
+          bisect(&h[i], sk[i], md[side[i]], mx[side[i]], out4 + nk), nk += 2;
+        else
+          out4[nk++] = h[i];
+      }
+      for (int i = 0; i < nk; ++i) {
+        memcpy(kc[i], out4[i].c, sizeof kc[i]);
+        memcpy(kx[i], out4[i].x, sizeof kx[i]);
+      }
+    } else if (cnt == 1) {
       int a = one, b = (one + 1) % 3, o = (one + 2) % 3;
       size_t c0[3] = {cn[a], md[one], cn[o]}, c1[3] = {md[one], cn[b], cn[o]};
       memcpy(kc[0], c0, sizeof c0);
@@ -381,6 +447,7 @@ done:
   free(edge_of);
   free(edge_line);
   free(marked);
+  free(longest);
   free(used);
   free(remap);
   free(mid);
