@@ -80,6 +80,12 @@ if "$build/gmsh_ho_mesh" "$bottle" 3 g48.msh 2> /dev/null; then
   ok "more elements ($e_in -> $e_out)" "[ '$e_out' -gt '$e_in' ]"
   "$hocad" quality "$bottle" g48_split.msh --json gq.json > /dev/null 2>&1
   ok "the split mesh reads back valid" "[ $? -eq 0 ] && grep -q '\"tangled\": 0,' gq.json && grep -q '\"elements\": $e_out,' gq.json"
+  # one sweep cannot untangle: both chains of splits run in turn, twice
+  # each, and the unsplit mesh, the least tangled, is kept
+  "$hocad" optimize "$bottle" g48.msh -o g48_one.msh --max-iterations 1 --refinements 2 \
+    --json g2.json > /dev/null 2> g2err.txt
+  code=$?
+  ok "two chains of splits in turn, exit 5" "[ $code -eq 5 ] && [ \$(grep -c 'splitting them.* red-green' g2err.txt) -eq 2 ] && [ \$(grep -c 'splitting them.* at their longest edges' g2err.txt) -eq 2 ] && grep -q '\"refinements\": 4,' g2.json && grep -q 'kept the mesh before it' g2err.txt"
 else
   ok "gmsh 4.8 meshes the bottle" "false"
 fi

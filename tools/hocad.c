@@ -275,17 +275,17 @@ static const char *usage_optimize =
     "elements stay tangled, it also starts from the input's own nodes and keeps\n"
     "the result with fewer tangled elements. Elements still tangled then are\n"
     "split (a 'split' stage; see --refinements): the new elements' nodes are\n"
-    "placed straight between their corners, every other node stays. Splits are\n"
-    "red-green first; if elements stay tangled, they are made again from the\n"
-    "unsplit mesh at the longest edges (which cuts slivers across), and the\n"
-    "result with the fewest tangled elements is kept.\n"
+    "placed straight between their corners, every other node stays. Two chains\n"
+    "of splits are made in turn from the unsplit result, one red-green, one at\n"
+    "longest edges (which cuts slivers across), until a result has no tangled\n"
+    "element; the result with the fewest tangled elements is kept.\n"
     "\n"
     "options:\n"
     "  -o, --output F.msh   optimized mesh (MSH 4.1), or F.vtu\n"
     "  --keep-nodes         always start from the input's own high-order nodes\n"
     "  --refinements N      if elements stay tangled, split them in four (their\n"
     "                       neighbours in two to four) and optimise again, at most\n"
-    "                       N times of each kind (default 2; 0 keeps the input's\n"
+    "                       N times in each chain (default 3; 0 keeps the input's\n"
     "                       elements)\n"
     "  --vtu F.vtu          also a VTU with q per element\n"
     "  --json F.json        the report as JSON\n"
@@ -1136,23 +1136,19 @@ static int optimize_starts(const options *o, report *r, hoc_mesh **mesh) {
 
 /* Where `optimize` leaves tangled elements: split them in four (their
  * neighbours as `kind` says, to keep the mesh conforming; children placed
- * straight between their corners) and optimise again. The next split
- * starts from this result; *best and *best_r hold the result with the
- * fewest tangled elements so far (the earlier on a tie); `base` (the
- * unsplit result) is never freed here. The report keeps its input stage,
- * then "split" and "optimized". */
-static int split_tangled(const options *o, report *r, hoc_split_kind kind, hoc_mesh **mesh,
-                         const hoc_mesh *base, hoc_mesh **best, report *best_r) {
-  size_t ne = hoc_mesh_num_elements(*mesh), total = 0;
+ * straight between their corners) and optimise again: *fine, with the
+ * report r (its input stage kept, then "split" and "optimized"). */
+static int split_tangled(const options *o, report *r, hoc_split_kind kind, const hoc_mesh *mesh,
+                         hoc_mesh **fine) {
+  size_t ne = hoc_mesh_num_elements(mesh), total = 0;
   unsigned char *tangled = calloc(ne ? ne : 1, 1);
   if (!tangled) {
     error_line("out of memory");
     return EXIT_FAILURE_;
   }
   double t0 = now();
-  hoc_mesh *fine = NULL;
-  hoc_status st = hoc_mesh_measure(*mesh, o->measure, NULL, tangled, NULL);
-  if (st == HOC_OK) st = hoc_mesh_split(*mesh, tangled, kind, &fine);
+  hoc_status st = hoc_mesh_measure(mesh, o->measure, NULL, tangled, NULL);
+  if (st == HOC_OK) st = hoc_mesh_split(mesh, tangled, kind, fine);
   if (st != HOC_OK) {
     free(tangled);
     return fail(st, 0);
@@ -1165,49 +1161,62 @@ static int split_tangled(const options *o, report *r, hoc_split_kind kind, hoc_m
             "%s: %zu element(s) still tangled; splitting them and their neighbours %s (%zu -> "
             "%zu elements) and optimising again (refinement %d): faces",
             program, total, kind == HOC_SPLIT_RED_GREEN ? "red-green" : "at their longest edges",
-            ne, hoc_mesh_num_elements(fine), r->refinements);
-    print_faces(*mesh, tangled);
+            ne, hoc_mesh_num_elements(*fine), r->refinements);
+    print_faces(mesh, tangled);
   }
   free(tangled);
   r->n = 1; /* the input stage stays */
-  int code = measure_stage(o, r, "split", fine, now() - t0, NULL);
-  if (!code) code = optimize_stage(o, r, fine);
-  if (code) {
-    hoc_mesh_destroy(&fine);
-    return code;
-  }
-  if (*mesh != *best && *mesh != base) hoc_mesh_destroy(mesh);
-  *mesh = fine;
-  if (r->stages[r->n - 1].stats.tangled < best_r->stages[best_r->n - 1].stats.tangled) {
-    if (*best != base) hoc_mesh_destroy(best);
-    *best = fine;
-    *best_r = *r;
-  }
-  return EXIT_OK;
+  int code = measure_stage(o, r, "split", *fine, now() - t0, NULL);
+  if (!code) code = optimize_stage(o, r, *fine);
+  if (code) hoc_mesh_destroy(fine);
+  return code;
 }
 
-/* Up to o->refinements splits red-green from the optimised mesh *mesh and,
- * if elements stay tangled, as many at longest edges from the same mesh
- * (red-green keeps shapes, but its two-way cuts make slivers thinner;
- * bisection cuts slivers across). *mesh and *r become the result with the
- * fewest tangled elements (the earlier on a tie); r->refinements counts
- * every split made. */
+/* Destroy *m unless it is one of keep[n]. */
+static void drop_mesh(hoc_mesh **m, hoc_mesh *const *keep, int n) {
+  for (int i = 0; i < n; ++i)
+    if (*m == keep[i]) {
+      *m = NULL;
+      return;
+    }
+  hoc_mesh_destroy(m);
+}
+
+/* Two chains of splits from the optimised mesh *mesh, taken in turn: one
+ * red-green (keeps shapes, but its two-way cuts make slivers thinner), one
+ * at longest edges (cuts slivers across), each at most o->refinements
+ * splits and each going on from its own latest result. Stops once a result
+ * has no tangled element. *mesh and *r become the result with the fewest
+ * tangled elements (the earlier on a tie); r->refinements counts every
+ * split made. */
 static int refine_tangled(const options *o, report *r, hoc_mesh **mesh) {
-  hoc_mesh *base = *mesh, *best = base, *cur = base;
-  report base_r = *r, best_r = *r;
-  int code = EXIT_OK, made = 0;
   static const hoc_split_kind kinds[2] = {HOC_SPLIT_RED_GREEN, HOC_SPLIT_LONGEST_EDGE};
-  for (int k = 0; k < 2 && !code && best_r.stages[best_r.n - 1].stats.tangled; ++k) {
-    if (cur != best && cur != base) hoc_mesh_destroy(&cur);
-    cur = base;
-    *r = base_r;
-    r->refinements = made;
-    for (int i = 0; i < o->refinements && !code && r->stages[r->n - 1].stats.tangled; ++i)
-      code = split_tangled(o, r, kinds[k], &cur, base, &best, &best_r);
-    made = r->refinements;
-  }
+  hoc_mesh *base = *mesh, *best = base, *cur[2] = {base, base};
+  report best_r = *r, chain_r[2] = {*r, *r};
+  int code = EXIT_OK, made = 0;
+  for (int level = 0; level < o->refinements && !code; ++level)
+    for (int k = 0; k < 2 && !code && best_r.stages[best_r.n - 1].stats.tangled; ++k) {
+      hoc_mesh *fine = NULL;
+      chain_r[k].refinements = made;
+      code = split_tangled(o, &chain_r[k], kinds[k], cur[k], &fine);
+      made = chain_r[k].refinements;
+      if (code) break;
+      hoc_mesh *keep[4] = {base, best, cur[1 - k], fine};
+      drop_mesh(&cur[k], keep, 4);
+      cur[k] = fine;
+      if (chain_r[k].stages[chain_r[k].n - 1].stats.tangled <
+          best_r.stages[best_r.n - 1].stats.tangled) {
+        hoc_mesh *keep2[3] = {base, cur[0], cur[1]};
+        drop_mesh(&best, keep2, 3);
+        best = fine;
+        best_r = chain_r[k];
+      }
+    }
   int improved = best != base;
-  if (cur != best && cur != base) hoc_mesh_destroy(&cur);
+  for (int k = 0; k < 2; ++k) {
+    hoc_mesh *keep[3] = {base, best, k ? cur[0] : NULL};
+    drop_mesh(&cur[k], keep, 3);
+  }
   if (improved) hoc_mesh_destroy(&base);
   *mesh = best;
   *r = best_r;
@@ -1225,7 +1234,7 @@ static int refine_tangled(const options *o, report *r, hoc_mesh **mesh) {
 
 static int cmd_optimize(int argc, char **argv) {
   options o = {0};
-  o.refinements = 2;
+  o.refinements = 3;
   const char *pos[2];
   int n_pos, pr = parse(argc, argv, &o, pos, 2, &n_pos, CMD_OPTIMIZE);
   if (pr < 0) {
