@@ -7,14 +7,20 @@
 # kept optimisation, splits, wall time of the whole command, peak memory.
 #
 # usage: bench/gmsh_optimize.sh [HOCAD] [GMSH] [MODELS_DIR]
-#   GMSH          default ../shared/peers/gmsh-5.0-dev, else `gmsh`
+#   GMSH          default ../shared/peers/gmsh-5.0-dev, else `gmsh`; `lib`:
+#                 Debian's libgmsh (4.8) through the tests' helper
+#                 build/tests/gmsh_ho_mesh (the same as `gmsh -2 -order P`)
 #   BENCH_MODELS  model file names (default: every model in MODELS_DIR)
 #   BENCH_ORDER   default 3;  BENCH_THREADS default 2
 # SPDX-License-Identifier: GPL-2.0-or-later
 set -u
 . "$(dirname "$0")/common.sh"
 hocad=$(readlink -f "${1:-$here/build/hocad}")
-gmsh=$(pick_gmsh "${2:-}")
+if [ "${2:-}" = lib ]; then
+  gmsh=$here/build/tests/gmsh_ho_mesh
+else
+  gmsh=$(pick_gmsh "${2:-}")
+fi
 [ -n "$gmsh" ] || { echo "no gmsh found"; exit 1; }
 models=$(readlink -f "${3:-$here/examples/models}")
 list=${BENCH_MODELS:-$(cd "$models" && ls *.step *.stp *.brep *.iges *.igs 2>/dev/null)}
@@ -25,7 +31,12 @@ printf "%-26s %2s %11s %9s %15s %15s %5s %8s %5s %7s %7s\n" model p elements tan
   "min q in->opt" "mean q in->opt" iters opt_s split wall_s peakMB
 for m in $list; do
   rm -f "$work"/*
-  if ! "$gmsh" "$models/$m" -2 -order "$order" -nt 1 -o "$work/g.msh" > "$work/g.log" 2>&1 || [ ! -s "$work/g.msh" ]; then
+  if [ "${2:-}" = lib ]; then
+    "$gmsh" "$models/$m" "$order" "$work/g.msh" > "$work/g.log" 2>&1
+  else
+    "$gmsh" "$models/$m" -2 -order "$order" -nt 1 -o "$work/g.msh" > "$work/g.log" 2>&1
+  fi
+  if [ $? -ne 0 ] || [ ! -s "$work/g.msh" ]; then
     echo "$m: gmsh made no mesh ($(grep -m1 -i error "$work/g.log"))"
     continue
   fi

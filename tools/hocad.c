@@ -246,19 +246,18 @@ static const char *usage_mesh =
     "  --refinements N      if elements stay tangled, mesh their faces again with\n"
     "                       edges half as long (and, without --size-min, a minimum\n"
     "                       size ten times smaller) and start again, at most N\n"
-    "                       times (default 2; not with --linear)\n"
-    OPTIMIZE_OPTIONS
+    "                       times (default 2; with --linear, the elements are split\n"
+    "                       as 'hocad optimize' splits them, default 3)\n" OPTIMIZE_OPTIONS
     "  -o, --output F.msh   gmsh MSH 4.1 output (default: MODEL-NAME_pP.msh here;\n"
     "                       orders above 10 have no MSH type: use --vtu)\n"
     "  --vtu F.vtu          VTK Lagrange triangles with q per element\n"
     "  --json F.json        the report as JSON\n"
     "  --png F.png          picture of the stages side by side (linear | raised |\n"
     "                       optimized), coloured by q\n"
-    "  --histogram F.png    histogram of q per stage\n"
-    PICTURE_OPTIONS("--png-size")
-    "  --no-output          write no mesh file\n"
-    "  --threads N          threads (default: all cores)\n"
-    "  -q, --quiet          print only errors\n";
+    "  --histogram F.png    histogram of q per stage\n" PICTURE_OPTIONS(
+        "--png-size") "  --no-output          write no mesh file\n"
+                      "  --threads N          threads (default: all cores)\n"
+                      "  -q, --quiet          print only errors\n";
 
 static const char *usage_optimize =
     "usage: hocad optimize MODEL IN.msh -o OUT.msh [options]\n"
@@ -565,6 +564,7 @@ static void progress(const options *o, const char *fmt, ...) {
 static int measure_stage(const options *o, report *r, const char *name, const hoc_mesh *mesh,
                          double seconds, double *q) {
   stage *s = &r->stages[r->n];
+  *s = (stage){0}; /* a slot reused after a refinement keeps nothing */
   s->name = name;
   s->seconds = seconds;
   hoc_status st = hoc_mesh_measure(mesh, o->measure, q, NULL, &s->stats);
@@ -803,6 +803,104 @@ static void print_faces(const hoc_mesh *mesh, const unsigned char *flag) {
   fprintf(stderr, "%s\n", more ? " ..." : "");
 }
 
+/* Where `optimize` leaves tangled elements: split them in four (their
+ * neighbours as `kind` says, to keep the mesh conforming; children placed
+ * straight between their corners) and optimise again: *fine, with the
+ * report r (its first n_keep stages kept, then "split" and "optimized"). */
+static int split_tangled(const options *o, report *r, int n_keep, hoc_split_kind kind,
+                         const hoc_mesh *mesh, hoc_mesh **fine) {
+  size_t ne = hoc_mesh_num_elements(mesh), total = 0;
+  unsigned char *tangled = calloc(ne ? ne : 1, 1);
+  if (!tangled) {
+    error_line("out of memory");
+    return EXIT_FAILURE_;
+  }
+  double t0 = now();
+  hoc_status st = hoc_mesh_measure(mesh, o->measure, NULL, tangled, NULL);
+  if (st == HOC_OK) st = hoc_mesh_split(mesh, tangled, kind, fine);
+  if (st != HOC_OK) {
+    free(tangled);
+    return fail(st, 0);
+  }
+  for (size_t e = 0; e < ne; ++e)
+    total += tangled[e];
+  r->refinements++;
+  if (!o->quiet) {
+    fprintf(stderr,
+            "%s: %zu element(s) still tangled; splitting them and their neighbours %s (%zu -> "
+            "%zu elements) and optimising again (refinement %d): faces",
+            program, total, kind == HOC_SPLIT_RED_GREEN ? "red-green" : "at their longest edges",
+            ne, hoc_mesh_num_elements(*fine), r->refinements);
+    print_faces(mesh, tangled);
+  }
+  free(tangled);
+  r->n = n_keep; /* the stages before the optimisation stay */
+  int code = measure_stage(o, r, "split", *fine, now() - t0, NULL);
+  if (!code) code = optimize_stage(o, r, *fine);
+  if (code) hoc_mesh_destroy(fine);
+  return code;
+}
+
+/* Destroy *m unless it is one of keep[n]. */
+static void drop_mesh(hoc_mesh **m, hoc_mesh *const *keep, int n) {
+  for (int i = 0; i < n; ++i)
+    if (*m == keep[i]) {
+      *m = NULL;
+      return;
+    }
+  hoc_mesh_destroy(m);
+}
+
+/* Two chains of splits from the optimised mesh *mesh, taken in turn: one
+ * red-green (keeps shapes, but its two-way cuts make slivers thinner), one
+ * at longest edges (cuts slivers across), each at most o->refinements
+ * splits and each going on from its own latest result. Stops once a result
+ * has no tangled element. *mesh and *r become the result with the fewest
+ * tangled elements (the earlier on a tie); r->refinements counts every
+ * split made; the split results' reports keep r's first n_keep stages. */
+static int refine_tangled(const options *o, report *r, int n_keep, hoc_mesh **mesh) {
+  static const hoc_split_kind kinds[2] = {HOC_SPLIT_RED_GREEN, HOC_SPLIT_LONGEST_EDGE};
+  hoc_mesh *base = *mesh, *best = base, *cur[2] = {base, base};
+  report best_r = *r, chain_r[2] = {*r, *r};
+  int code = EXIT_OK, made = 0;
+  for (int level = 0; level < o->refinements && !code; ++level)
+    for (int k = 0; k < 2 && !code && best_r.stages[best_r.n - 1].stats.tangled; ++k) {
+      hoc_mesh *fine = NULL;
+      chain_r[k].refinements = made;
+      code = split_tangled(o, &chain_r[k], n_keep, kinds[k], cur[k], &fine);
+      made = chain_r[k].refinements;
+      if (code) break;
+      hoc_mesh *keep[4] = {base, best, cur[1 - k], fine};
+      drop_mesh(&cur[k], keep, 4);
+      cur[k] = fine;
+      if (chain_r[k].stages[chain_r[k].n - 1].stats.tangled <
+          best_r.stages[best_r.n - 1].stats.tangled) {
+        hoc_mesh *keep2[3] = {base, cur[0], cur[1]};
+        drop_mesh(&best, keep2, 3);
+        best = fine;
+        best_r = chain_r[k];
+      }
+    }
+  int improved = best != base;
+  for (int k = 0; k < 2; ++k) {
+    hoc_mesh *keep[3] = {base, best, k ? cur[0] : NULL};
+    drop_mesh(&cur[k], keep, 3);
+  }
+  if (improved) hoc_mesh_destroy(&base);
+  *mesh = best;
+  *r = best_r;
+  r->refinements = made;
+  if (!code && !o->quiet && improved)
+    fprintf(stderr,
+            "%s: note: kept the mesh of refinement %d of %d, which has the fewest tangled "
+            "elements\n",
+            program, best_r.refinements, made);
+  else if (!code && !o->quiet)
+    fprintf(stderr, "%s: note: splitting left no fewer tangled elements: kept the mesh before it\n",
+            program);
+  return code;
+}
+
 static int refine_faces(const options *o, report *r, const hoc_model *model, const hoc_mesh *lin,
                         const hoc_mesh *ho, double **face_size) {
   size_t ne = hoc_mesh_num_elements(ho);
@@ -839,7 +937,7 @@ static int cmd_mesh(int argc, char **argv) {
   options o = {0};
   o.order = 3;
   o.optimize = 1;
-  o.refinements = 2;
+  o.refinements = -1; /* default below: 2, or 3 splits per chain with --linear */
   const char *pos[1];
   int n_pos, pr = parse(argc, argv, &o, pos, 1, &n_pos, CMD_MESH);
   if (pr < 0) {
@@ -852,6 +950,7 @@ static int cmd_mesh(int argc, char **argv) {
     return EXIT_USAGE;
   }
   o.model = pos[0];
+  if (o.refinements < 0) o.refinements = o.linear ? 3 : 2;
   if (o.size_min > 0 && o.size > 0 && o.size_min > o.size) {
     error_line("--size-min %g exceeds --size %g", o.size_min, o.size);
     return EXIT_USAGE;
@@ -946,10 +1045,16 @@ static int cmd_mesh(int argc, char **argv) {
       }
       if ((code = optimize_stage(&o, &r, ho))) goto done;
     }
-    /* elements left tangled: their faces meshed again finer, from the start */
-    if (!o.optimize || o.order < 2 || o.linear || !r.stages[r.n - 1].stats.tangled ||
+    /* elements left tangled: their faces meshed again finer, from the
+     * start; in a given linear mesh, the elements split as `optimize` does */
+    if (!o.optimize || o.order < 2 || !r.stages[r.n - 1].stats.tangled ||
         r.refinements >= o.refinements)
       break;
+    if (o.linear) {
+      if ((code = refine_tangled(&o, &r, 2, &ho))) goto done;
+      final = ho;
+      break;
+    }
     if ((code = refine_faces(&o, &r, model, lin, ho, &face_size))) goto done;
     /* and unless --size-min was given, let the curvature sizing go ten
      * times finer (the bottle's thread curls through 130 degrees within
@@ -1134,104 +1239,6 @@ static int optimize_starts(const options *o, report *r, hoc_mesh **mesh) {
   return EXIT_OK;
 }
 
-/* Where `optimize` leaves tangled elements: split them in four (their
- * neighbours as `kind` says, to keep the mesh conforming; children placed
- * straight between their corners) and optimise again: *fine, with the
- * report r (its input stage kept, then "split" and "optimized"). */
-static int split_tangled(const options *o, report *r, hoc_split_kind kind, const hoc_mesh *mesh,
-                         hoc_mesh **fine) {
-  size_t ne = hoc_mesh_num_elements(mesh), total = 0;
-  unsigned char *tangled = calloc(ne ? ne : 1, 1);
-  if (!tangled) {
-    error_line("out of memory");
-    return EXIT_FAILURE_;
-  }
-  double t0 = now();
-  hoc_status st = hoc_mesh_measure(mesh, o->measure, NULL, tangled, NULL);
-  if (st == HOC_OK) st = hoc_mesh_split(mesh, tangled, kind, fine);
-  if (st != HOC_OK) {
-    free(tangled);
-    return fail(st, 0);
-  }
-  for (size_t e = 0; e < ne; ++e)
-    total += tangled[e];
-  r->refinements++;
-  if (!o->quiet) {
-    fprintf(stderr,
-            "%s: %zu element(s) still tangled; splitting them and their neighbours %s (%zu -> "
-            "%zu elements) and optimising again (refinement %d): faces",
-            program, total, kind == HOC_SPLIT_RED_GREEN ? "red-green" : "at their longest edges",
-            ne, hoc_mesh_num_elements(*fine), r->refinements);
-    print_faces(mesh, tangled);
-  }
-  free(tangled);
-  r->n = 1; /* the input stage stays */
-  int code = measure_stage(o, r, "split", *fine, now() - t0, NULL);
-  if (!code) code = optimize_stage(o, r, *fine);
-  if (code) hoc_mesh_destroy(fine);
-  return code;
-}
-
-/* Destroy *m unless it is one of keep[n]. */
-static void drop_mesh(hoc_mesh **m, hoc_mesh *const *keep, int n) {
-  for (int i = 0; i < n; ++i)
-    if (*m == keep[i]) {
-      *m = NULL;
-      return;
-    }
-  hoc_mesh_destroy(m);
-}
-
-/* Two chains of splits from the optimised mesh *mesh, taken in turn: one
- * red-green (keeps shapes, but its two-way cuts make slivers thinner), one
- * at longest edges (cuts slivers across), each at most o->refinements
- * splits and each going on from its own latest result. Stops once a result
- * has no tangled element. *mesh and *r become the result with the fewest
- * tangled elements (the earlier on a tie); r->refinements counts every
- * split made. */
-static int refine_tangled(const options *o, report *r, hoc_mesh **mesh) {
-  static const hoc_split_kind kinds[2] = {HOC_SPLIT_RED_GREEN, HOC_SPLIT_LONGEST_EDGE};
-  hoc_mesh *base = *mesh, *best = base, *cur[2] = {base, base};
-  report best_r = *r, chain_r[2] = {*r, *r};
-  int code = EXIT_OK, made = 0;
-  for (int level = 0; level < o->refinements && !code; ++level)
-    for (int k = 0; k < 2 && !code && best_r.stages[best_r.n - 1].stats.tangled; ++k) {
-      hoc_mesh *fine = NULL;
-      chain_r[k].refinements = made;
-      code = split_tangled(o, &chain_r[k], kinds[k], cur[k], &fine);
-      made = chain_r[k].refinements;
-      if (code) break;
-      hoc_mesh *keep[4] = {base, best, cur[1 - k], fine};
-      drop_mesh(&cur[k], keep, 4);
-      cur[k] = fine;
-      if (chain_r[k].stages[chain_r[k].n - 1].stats.tangled <
-          best_r.stages[best_r.n - 1].stats.tangled) {
-        hoc_mesh *keep2[3] = {base, cur[0], cur[1]};
-        drop_mesh(&best, keep2, 3);
-        best = fine;
-        best_r = chain_r[k];
-      }
-    }
-  int improved = best != base;
-  for (int k = 0; k < 2; ++k) {
-    hoc_mesh *keep[3] = {base, best, k ? cur[0] : NULL};
-    drop_mesh(&cur[k], keep, 3);
-  }
-  if (improved) hoc_mesh_destroy(&base);
-  *mesh = best;
-  *r = best_r;
-  r->refinements = made;
-  if (!code && !o->quiet && improved)
-    fprintf(stderr,
-            "%s: note: kept the mesh of refinement %d of %d, which has the fewest tangled "
-            "elements\n",
-            program, best_r.refinements, made);
-  else if (!code && !o->quiet)
-    fprintf(stderr, "%s: note: splitting left no fewer tangled elements: kept the mesh before it\n",
-            program);
-  return code;
-}
-
 static int cmd_optimize(int argc, char **argv) {
   options o = {0};
   o.refinements = 3;
@@ -1269,7 +1276,7 @@ static int cmd_optimize(int argc, char **argv) {
   if ((code = measure_stage(&o, &r, "input", mesh, now() - t0, NULL))) goto done;
   if ((code = optimize_starts(&o, &r, &mesh))) goto done;
   if (r.stages[r.n - 1].stats.tangled && o.refinements > 0 &&
-      (code = refine_tangled(&o, &r, &mesh)))
+      (code = refine_tangled(&o, &r, 1, &mesh)))
     goto done;
   if (!o.quiet) {
     printf("mesh %s on %s: %zu nodes\n", o.mesh_in, o.model, hoc_mesh_num_nodes(mesh));
