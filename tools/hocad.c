@@ -246,8 +246,9 @@ static const char *usage_mesh =
     "  --refinements N      if elements stay tangled, mesh their faces again with\n"
     "                       edges half as long (and, without --size-min, a minimum\n"
     "                       size ten times smaller) and start again, at most N\n"
-    "                       times (default 2; with --linear, the elements are split\n"
-    "                       as 'hocad optimize' splits them, default 3)\n" OPTIMIZE_OPTIONS
+    "                       times (default 2), then split them as 'hocad optimize'\n"
+    "                       does, N times per chain (with --linear only the\n"
+    "                       splits, default 3)\n" OPTIMIZE_OPTIONS
     "  -o, --output F.msh   gmsh MSH 4.1 output (default: MODEL-NAME_pP.msh here;\n"
     "                       orders above 10 have no MSH type: use --vtu)\n"
     "  --vtu F.vtu          VTK Lagrange triangles with q per element\n"
@@ -445,7 +446,7 @@ typedef struct report {
   double model_seconds; /* reading the CAD model */
   size_t nodes;         /* of the final mesh */
   int refinements;      /* times tangled elements were meshed again finer (mesh: their
-                           faces; optimize: split) */
+                           faces, then split; optimize and mesh --linear: split) */
 } report;
 
 static void print_table(const report *r) {
@@ -856,13 +857,14 @@ static void drop_mesh(hoc_mesh **m, hoc_mesh *const *keep, int n) {
  * at longest edges (cuts slivers across), each at most o->refinements
  * splits and each going on from its own latest result. Stops once a result
  * has no tangled element. *mesh and *r become the result with the fewest
- * tangled elements (the earlier on a tie); r->refinements counts every
- * split made; the split results' reports keep r's first n_keep stages. */
+ * tangled elements (the earlier on a tie); r->refinements goes on counting
+ * with every split made; the split results' reports keep r's first n_keep
+ * stages. */
 static int refine_tangled(const options *o, report *r, int n_keep, hoc_mesh **mesh) {
   static const hoc_split_kind kinds[2] = {HOC_SPLIT_RED_GREEN, HOC_SPLIT_LONGEST_EDGE};
   hoc_mesh *base = *mesh, *best = base, *cur[2] = {base, base};
   report best_r = *r, chain_r[2] = {*r, *r};
-  int code = EXIT_OK, made = 0;
+  int code = EXIT_OK, made = r->refinements;
   for (int level = 0; level < o->refinements && !code; ++level)
     for (int k = 0; k < 2 && !code && best_r.stages[best_r.n - 1].stats.tangled; ++k) {
       hoc_mesh *fine = NULL;
@@ -1046,11 +1048,10 @@ static int cmd_mesh(int argc, char **argv) {
       if ((code = optimize_stage(&o, &r, ho))) goto done;
     }
     /* elements left tangled: their faces meshed again finer, from the
-     * start; in a given linear mesh, the elements split as `optimize` does */
-    if (!o.optimize || o.order < 2 || !r.stages[r.n - 1].stats.tangled ||
-        r.refinements >= o.refinements)
-      break;
-    if (o.linear) {
+     * start; in a given linear mesh, or once the remeshing is spent, the
+     * elements split as `optimize` splits them */
+    if (!o.optimize || o.order < 2 || !r.stages[r.n - 1].stats.tangled || o.refinements < 1) break;
+    if (o.linear || r.refinements >= o.refinements) {
       if ((code = refine_tangled(&o, &r, 2, &ho))) goto done;
       final = ho;
       break;
