@@ -973,6 +973,10 @@ static int cmd_mesh(int argc, char **argv) {
   int code = EXIT_OK;
   hoc_model *model = NULL;
   hoc_mesh *lin = NULL, *ho = NULL, *written = NULL, *raised = NULL;
+  /* the remeshing attempt with the fewest tangled elements so far (the
+   * earlier on a tie), while another is tried */
+  hoc_mesh *kept_lin = NULL, *kept_ho = NULL, *kept_raised = NULL;
+  report kept_r = {0};
   double *q = NULL, *face_size = NULL;
   report r = {0};
   progress(&o, "reading %s", o.model);
@@ -1052,10 +1056,30 @@ static int cmd_mesh(int argc, char **argv) {
      * elements split as `optimize` splits them */
     if (!o.optimize || o.order < 2 || !r.stages[r.n - 1].stats.tangled || o.refinements < 1) break;
     if (o.linear || r.refinements >= o.refinements) {
+      size_t now_tangled = r.stages[r.n - 1].stats.tangled;
+      if (kept_ho && kept_r.stages[kept_r.n - 1].stats.tangled < now_tangled) {
+        int made = r.refinements;
+        if (!o.quiet)
+          fprintf(stderr,
+                  "%s: note: the last mesh has more tangled elements (%zu) than the one after "
+                  "%d remeshing(s) (%zu): going on from that one\n",
+                  program, now_tangled, kept_r.refinements,
+                  kept_r.stages[kept_r.n - 1].stats.tangled);
+        hoc_mesh_destroy(&raised);
+        hoc_mesh_destroy(&ho);
+        hoc_mesh_destroy(&lin);
+        lin = kept_lin;
+        ho = kept_ho;
+        raised = kept_raised;
+        kept_lin = kept_ho = kept_raised = NULL;
+        r = kept_r;
+        r.refinements = made;
+      }
       if ((code = refine_tangled(&o, &r, 2, &ho))) goto done;
       final = ho;
       break;
     }
+    report attempt_r = r;
     if ((code = refine_faces(&o, &r, model, lin, ho, &face_size))) goto done;
     /* and unless --size-min was given, let the curvature sizing go ten
      * times finer (the bottle's thread curls through 130 degrees within
@@ -1065,9 +1089,21 @@ static int cmd_mesh(int argc, char **argv) {
       hoc_linear_sizes(model, &lo, &size_max, &size_min);
       lo.size_min = size_min / 10;
     }
-    hoc_mesh_destroy(&raised);
-    hoc_mesh_destroy(&ho);
-    hoc_mesh_destroy(&lin);
+    if (!kept_ho || attempt_r.stages[attempt_r.n - 1].stats.tangled <
+                        kept_r.stages[kept_r.n - 1].stats.tangled) {
+      hoc_mesh_destroy(&kept_raised);
+      hoc_mesh_destroy(&kept_ho);
+      hoc_mesh_destroy(&kept_lin);
+      kept_lin = lin;
+      kept_ho = ho;
+      kept_raised = raised;
+      kept_r = attempt_r;
+      lin = ho = raised = NULL;
+    } else {
+      hoc_mesh_destroy(&raised);
+      hoc_mesh_destroy(&ho);
+      hoc_mesh_destroy(&lin);
+    }
   }
   /* files hold equispaced nodes: measure what is written */
   if (o.nodes != HOC_NODES_EQUISPACED && o.order >= 3 && (out || o.vtu)) {
@@ -1106,6 +1142,9 @@ done:
   hoc_mesh_destroy(&written);
   hoc_mesh_destroy(&ho);
   hoc_mesh_destroy(&lin);
+  hoc_mesh_destroy(&kept_raised);
+  hoc_mesh_destroy(&kept_ho);
+  hoc_mesh_destroy(&kept_lin);
   hoc_model_destroy(&model);
   return code;
 }
