@@ -935,6 +935,15 @@ static int refine_faces(const options *o, report *r, const hoc_model *model, con
   return EXIT_OK;
 }
 
+/* Free the meshes *to[0..2] and move *from[0..2] into them (leaving NULL). */
+static void move_meshes(hoc_mesh **to[3], hoc_mesh **from[3]) {
+  for (int i = 0; i < 3; ++i) {
+    hoc_mesh_destroy(to[i]);
+    *to[i] = *from[i];
+    *from[i] = NULL;
+  }
+}
+
 static int cmd_mesh(int argc, char **argv) {
   options o = {0};
   o.order = 3;
@@ -976,6 +985,7 @@ static int cmd_mesh(int argc, char **argv) {
   /* the remeshing attempt with the fewest tangled elements so far (the
    * earlier on a tie), while another is tried */
   hoc_mesh *kept_lin = NULL, *kept_ho = NULL, *kept_raised = NULL;
+  hoc_mesh **attempt[3] = {&lin, &ho, &raised}, **kept[3] = {&kept_lin, &kept_ho, &kept_raised};
   report kept_r = {0};
   double *q = NULL, *face_size = NULL;
   report r = {0};
@@ -1065,13 +1075,7 @@ static int cmd_mesh(int argc, char **argv) {
                   "%d remeshing(s) (%zu): going on from that one\n",
                   program, now_tangled, kept_r.refinements,
                   kept_r.stages[kept_r.n - 1].stats.tangled);
-        hoc_mesh_destroy(&raised);
-        hoc_mesh_destroy(&ho);
-        hoc_mesh_destroy(&lin);
-        lin = kept_lin;
-        ho = kept_ho;
-        raised = kept_raised;
-        kept_lin = kept_ho = kept_raised = NULL;
+        move_meshes(attempt, kept);
         r = kept_r;
         r.refinements = made;
       }
@@ -1091,14 +1095,8 @@ static int cmd_mesh(int argc, char **argv) {
     }
     if (!kept_ho || attempt_r.stages[attempt_r.n - 1].stats.tangled <
                         kept_r.stages[kept_r.n - 1].stats.tangled) {
-      hoc_mesh_destroy(&kept_raised);
-      hoc_mesh_destroy(&kept_ho);
-      hoc_mesh_destroy(&kept_lin);
-      kept_lin = lin;
-      kept_ho = ho;
-      kept_raised = raised;
+      move_meshes(kept, attempt);
       kept_r = attempt_r;
-      lin = ho = raised = NULL;
     } else {
       hoc_mesh_destroy(&raised);
       hoc_mesh_destroy(&ho);
