@@ -134,7 +134,12 @@ hoc_status hoc_mesh_generate_linear(hoc_model *model, const hoc_linear_options *
  *  element's parametric map at the reference nodes of the requested
  *  distribution, and mapped onto the surface; nodes on CAD curves are placed
  *  in the curve's parameter. From a linear mesh this is the seed's step 2
- *  (elements straight in (u,v), curve edges following the curves).
+ *  (elements straight in (u,v), curve edges following the curves), with
+ *  one exception: at a cusp corner (a CAD vertex where the element's two
+ *  edges follow curves whose angle is under half the straight element's
+ *  angle there), both edges' nodes sit at sqrt(s) of the way from the
+ *  vertex instead of s, and the interior nodes are graded alike, so that
+ *  the curved element opens at that corner (see hoc_cusp).
  *  @param[in]  mesh     any mesh on the model
  *  @param[in]  order    target order p
  *  @param[in]  nodeset  reference node distribution
@@ -252,10 +257,11 @@ hoc_status hoc_mesh_split(const hoc_mesh *mesh, const unsigned char *elements, h
 
 /** A corner of an element at a CAD vertex where both of the element's
  *  edges lie on CAD curves that meet there at a small angle (a cusp of the
- *  model). The element follows both curves, so as the order grows its
- *  angle at that corner tends to the curves' angle and its distortion
- *  grows without bound: no placement of the nodes on the CAD gives it the
- *  quality of its straight-sided linear element. */
+ *  model). With evenly spaced edge nodes the element follows both curves
+ *  ever more closely as the order grows, its angle at that corner tends to
+ *  the curves' angle and its distortion grows without bound;
+ *  hoc_mesh_elevate therefore grades the nodes of such edges away from
+ *  the vertex. */
 typedef struct hoc_cusp {
   int vertex_tag;       /* CAD vertex at the corner */
   int curve_tags[2];    /* the two curves */

@@ -202,6 +202,69 @@ done:
   hoc_model_destroy(&model);
 }
 
+/* Where interior node j (1..p-1) of line l lies in its curve's parameter:
+ * (t_j - t_end0) / (t_end1 - t_end0). */
+static double line_fraction(const hoc_mesh *m, size_t l, int j) {
+  const size_t *ln = m->line_conn + l * (size_t)(m->order + 1);
+  double t0 = m->line_t[2 * l], t1 = m->line_t[2 * l + 1];
+  const hoc_cad_curve *cv = &m->model->curves[m->line_curve[l]];
+  double t = m->param[2 * ln[2 + j - 1]], mid = 0.5 * (t0 + t1);
+  if (cv->period > 0) t -= cv->period * floor((t - mid) / cv->period + 0.5); /* unwrap */
+  return (t - t0) / (t1 - t0);
+}
+
+/* Raised from a linear mesh, the edges of an element at a cusp have their
+ * nodes at sqrt(s) of the way from the cusp's vertex (s the equispaced
+ * position), and every other curve edge at s: exactly the two edges at
+ * each cusp corner of the 12 elements, each graded towards that vertex. */
+static void test_cusp_grading(const hoc_mesh *lin, int p) {
+  hoc_mesh *m = NULL;
+  CHECK_OK(hoc_mesh_elevate(lin, p, HOC_NODES_EQUISPACED, &m));
+  if (!m) return;
+  /* the lines at each cusp corner, found through the elements' edge nodes */
+  unsigned char *want = calloc(m->n_nodes, 1); /* edge node next to a cusp vertex */
+  size_t n_want = 0;
+  for (size_t e = 0; want && e < m->n_elems; ++e) {
+    hoc_cusp c;
+    int found;
+    CHECK_OK(hoc_mesh_element_cusp(m, e, 2.0, &c, &found));
+    if (!found) continue;
+    const size_t *cn = m->conn + e * (size_t)m->np;
+    for (int k = 0; k < 3; ++k) {
+      if (m->dim[cn[k]] != HOC_ON_VERTEX ||
+          m->model->vertices[m->entity[cn[k]]].tag != c.vertex_tag)
+        continue;
+      size_t next0 = cn[3 + k * (p - 1)];                     /* edge k from corner k */
+      size_t next1 = cn[3 + ((k + 2) % 3) * (p - 1) + p - 2]; /* edge k+2 into corner k */
+      n_want += !want[next0] + !want[next1];
+      want[next0] = want[next1] = 1;
+    }
+  }
+  CHECK(n_want >= 12 && n_want <= 24);
+  size_t graded = 0, uniform = 0, wrong = 0;
+  for (size_t l = 0; want && l < m->n_lines; ++l) {
+    const size_t *ln = m->line_conn + l * (size_t)(p + 1);
+    int at0 = want[ln[2]], at1 = want[ln[2 + p - 2]];
+    double err = 0;
+    for (int j = 1; j < p; ++j) {
+      double s = (double)j / p, expect = at0 ? sqrt(s) : at1 ? 1 - sqrt(1 - s) : s;
+      err = fmax(err, fabs(line_fraction(m, l, j) - expect));
+    }
+    if (err > 1e-9)
+      ++wrong;
+    else if (at0 || at1)
+      ++graded;
+    else
+      ++uniform;
+  }
+  CHECK(graded == n_want);
+  CHECK(wrong == 0);
+  CHECK(uniform > 0);
+  printf("cusp grading at order %d: %zu graded curve edges, %zu uniform\n", p, graded, uniform);
+  free(want);
+  hoc_mesh_destroy(&m);
+}
+
 /* gmsh_t20_component8.step has cusps: at each of its vertices 1 to 6 two
  * faces end in a sliver between tangent curves (curves 1 and 9 at vertex 2,
  * for one: 8.5e-7 degrees apart, measured directly through gmsh). One
@@ -231,6 +294,7 @@ static void test_cusp(void) {
   int found;
   CHECK_STATUS(hoc_mesh_element_cusp(m, m ? m->n_elems : 0, 2.0, &c, &found), HOC_ERR_ARGUMENT);
   hoc_mesh_destroy(&m);
+  test_cusp_grading(lin, 10);
   hoc_mesh_destroy(&lin);
   hoc_model_destroy(&model);
 }

@@ -688,8 +688,10 @@ static void report_tangled(const hoc_mesh *mesh, const double *q, const stage *o
 }
 
 /* Elements that end below 0.9 x the linear mesh's worst and have a corner at
- * a cusp of the CAD: say so, and what the rest of the mesh reaches. That
- * loss is the model's, not the optimiser's (see hoc_cusp). */
+ * a cusp of the CAD: say so, and what the rest of the mesh reaches (see
+ * hoc_cusp: a cusp element's curved corner closes where its straight one
+ * does not; raising grades its edges against that, which can still fall
+ * short, e.g. on a mesh read from a file). */
 static void report_cusps(const report *r, const hoc_mesh *mesh, const double *q) {
   double bound = 0.9 * r->stages[0].stats.min, rest = 1; /* q <= 1 */
   size_t ne = hoc_mesh_num_elements(mesh), low = 0, at_cusp = 0;
@@ -720,8 +722,8 @@ static void report_cusps(const report *r, const hoc_mesh *mesh, const double *q)
   fprintf(stderr,
           "%s: note: %zu of the %zu element(s) below 0.9 x the linear mesh's min q (%.4f) have a "
           "corner at a cusp of the CAD, where two of its curves meet at under 2 degrees (%s%s): "
-          "following both curves, such an element closes there as the order grows and cannot "
-          "keep its linear element's quality; the elements at no cusp have min q %.4f\n",
+          "following both curves, such an element closes there as the order grows; the "
+          "elements at no cusp have min q %.4f\n",
           program, at_cusp, low, r->stages[0].stats.min, list, at_cusp > 3 ? "; ..." : "", rest);
 }
 

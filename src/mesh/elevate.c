@@ -138,6 +138,61 @@ hoc_status hoc_mesh_edges(const hoc_mesh *in, size_t *elem_edge, unsigned char *
   return split_face_edges(in, n_edges, edge_line, elem_edge, first);
 }
 
+/* Cusps: at a CAD vertex where an element's two edges follow curves that
+ * leave it (nearly) tangentially, a curved element that follows both curves
+ * closes there to a zero angle, and the better its edges resolve the curves
+ * (the higher the order), the closer its Jacobian comes to 0 over a
+ * growing part of it. Edge nodes spaced as s^(1/2) from such a vertex
+ * make the interpolated edge leave it at an angle: where the curves part
+ * as the square of the distance, the gap between them is then linear in s.
+ * grade[edge] is the source node at which an edge is graded, SIZE_MAX if
+ * none (also if both its ends would be). A corner counts as a cusp when
+ * the curves' angle is under half the straight element's angle there. */
+static hoc_status cusp_grading(const hoc_mesh *in, const size_t *elem_edge, const size_t *edge_line,
+                               size_t n_edges, size_t *grade) {
+  const size_t both = SIZE_MAX - 1;
+  for (size_t id = 0; id < n_edges; ++id)
+    grade[id] = SIZE_MAX;
+  if (in->order != 1) return HOC_OK;
+  for (size_t e = 0; e < in->n_elems; ++e) {
+    const size_t *cn = in->conn + 3 * e;
+    for (int k = 0; k < 3; ++k) {
+      size_t v = cn[k];
+      if (in->dim[v] != HOC_ON_VERTEX) continue;
+      size_t id[2] = {elem_edge[3 * e + (size_t)k], elem_edge[3 * e + (size_t)(k + 2) % 3]};
+      size_t other[2] = {cn[(k + 1) % 3], cn[(k + 2) % 3]};
+      double d[2][3], w[2][3];
+      int ok = 1;
+      for (int j = 0; j < 2 && ok; ++j) {
+        size_t l = edge_line[id[j]];
+        if (l == SIZE_MAX) {
+          ok = 0;
+          break;
+        }
+        const size_t *ln = in->line_conn + 2 * l;
+        double t_far = in->line_t[2 * l + (ln[0] == v ? 1 : 0)];
+        HOC_TRY(hoc_curve_tangent_at(in->model, in->line_curve[l], in->entity[v], t_far, d[j]));
+        for (int c = 0; c < 3; ++c)
+          w[j][c] = in->xyz[3 * other[j] + c] - in->xyz[3 * v + c];
+      }
+      if (!ok) continue;
+      double curves =
+          acos(fmax(-1.0, fmin(1.0, d[0][0] * d[1][0] + d[0][1] * d[1][1] + d[0][2] * d[1][2])));
+      double lw0 = sqrt(w[0][0] * w[0][0] + w[0][1] * w[0][1] + w[0][2] * w[0][2]);
+      double lw1 = sqrt(w[1][0] * w[1][0] + w[1][1] * w[1][1] + w[1][2] * w[1][2]);
+      if (!(lw0 > 0 && lw1 > 0)) continue;
+      double c01 = (w[0][0] * w[1][0] + w[0][1] * w[1][1] + w[0][2] * w[1][2]) / (lw0 * lw1);
+      double corner = acos(fmax(-1.0, fmin(1.0, c01)));
+      if (!(curves < 0.5 * corner)) continue;
+      for (int j = 0; j < 2; ++j)
+        grade[id[j]] = grade[id[j]] == SIZE_MAX || grade[id[j]] == v ? v : both;
+    }
+  }
+  for (size_t id = 0; id < n_edges; ++id)
+    if (grade[id] == both) grade[id] = SIZE_MAX;
+  return HOC_OK;
+}
+
 /* Re-interpolation: the new mesh of order p on node set `set` evaluates
  * each source element's parametric map at the new reference nodes. Nodes
  * on CAD curves are interpolated in the curve's parameter t along the edge;
@@ -151,7 +206,7 @@ static hoc_status reinterpolate(const hoc_mesh *in, int p, hoc_nodeset set, hoc_
   double *rs = NULL, *s = NULL, *rs_in = NULL, *s_in = NULL, *Nsrc = NULL, *L = NULL;
   double *edge_t = NULL, *edge_uv = NULL;
   size_t *vmap = NULL, *conn = NULL, *lconn = NULL, *edge_first = NULL, *edge_a = NULL;
-  size_t *elem_edge = NULL;
+  size_t *elem_edge = NULL, *grade = NULL;
   unsigned char *edge_new = NULL;
   int *lcurve = NULL;
   hoc_lagrange *basis = NULL;
@@ -184,6 +239,8 @@ static hoc_status reinterpolate(const hoc_mesh *in, int p, hoc_nodeset set, hoc_
   HOC_ALLOC_GOTO(edge_line, 3 * ne + 1, done);
   HOC_ALLOC_GOTO(line_edge, in->n_lines + 1, done);
   HOC_TRY_GOTO(hoc_mesh_edges(in, elem_edge, edge_new, edge_line, line_edge, &n_edges), done);
+  HOC_ALLOC_GOTO(grade, n_edges + 1, done);
+  HOC_TRY_GOTO(cusp_grading(in, elem_edge, edge_line, n_edges, grade), done);
   /* corners (at most the source's nodes), edge nodes, interior nodes */
   HOC_TRY_GOTO(hoc_node_builder_reserve(&b, in->n_nodes + n_edges * (size_t)(p - 1) +
                                                 ne * (size_t)(np - 3 * p)),
@@ -243,7 +300,10 @@ static hoc_status reinterpolate(const hoc_mesh *in, int p, hoc_nodeset set, hoc_
           edge_t[j] = t;
         }
         for (int j = 0; j < p - 1; ++j) {
-          hoc_lagrange_1d(pin, s_in, s[j + 1], L, NULL);
+          double sj = s[j + 1];
+          if (grade[id] == a) sj = sqrt(sj);
+          if (grade[id] == cn[kb]) sj = 1 - sqrt(1 - sj);
+          hoc_lagrange_1d(pin, s_in, sj, L, NULL);
           double t = 0;
           for (int m = 0; m <= pin; ++m) t += L[m] * edge_t[m];
           HOC_TRY_GOTO(hoc_node_builder_add(&b, HOC_ON_CURVE, c, wrap_t(cv, t), 0, &dst[j]), done);
@@ -273,6 +333,11 @@ static hoc_status reinterpolate(const hoc_mesh *in, int p, hoc_nodeset set, hoc_
     /* interior nodes: the source element's map in (u,v); from a linear
      * element with a pole vertex, the collapsed (Duffy) map instead, whose
      * edges from the pole are the meridians the edge nodes follow */
+    int cusp = -1; /* a corner both of whose edges are graded there */
+    for (int k = 0; k < 3 && pin == 1 && p > 1; ++k)
+      if (grade[elem_edge[3 * e + (size_t)k]] == cn[k] &&
+          grade[elem_edge[3 * e + (size_t)(k + 2) % 3]] == cn[k])
+        cusp = k;
     for (int k = 3 * p; k < np; ++k) {
       const double *Nk = Nsrc + (size_t)k * npi;
       double uv[2] = {0, 0};
@@ -282,6 +347,14 @@ static hoc_status reinterpolate(const hoc_mesh *in, int p, hoc_nodeset set, hoc_
       }
       if (pin == 1) {
         double lam[3] = {1 - rs[2 * k] - rs[2 * k + 1], rs[2 * k], rs[2 * k + 1]};
+        if (cusp >= 0) {
+          /* graded like the edges: distance from the corner r -> sqrt(r) */
+          double r = 1 - lam[cusp], scale = sqrt(r) / r;
+          for (int j = 0; j < 3; ++j)
+            lam[j] = j == cusp ? 1 - sqrt(r) : lam[j] * scale;
+          for (int d = 0; d < 2; ++d)
+            uv[d] = lam[0] * euv[d] + lam[1] * euv[2 + d] + lam[2] * euv[4 + d];
+        }
         for (int j = 0; j < 3; ++j)
           for (int d = 0; d < 2; ++d) {
             if (!(in->slot_pole[sl[j]] & (1 << d))) continue;
@@ -353,6 +426,7 @@ done:
   free(edge_a);
   hoc_node_builder_free(&b);
   free(elem_edge);
+  free(grade);
   free(edge_new);
   free(edge_line);
   free(line_edge);

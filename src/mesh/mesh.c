@@ -132,10 +132,7 @@ static hoc_status group_nodes(const hoc_mesh *m, int dim, int n_entities, size_t
 
 /* Cusps ------------------------------------------------------------------- */
 
-/* Unit tangent at CAD vertex `vertex` of curve c, pointing into the curve
- * towards parameter t_in (a point of the curve near the vertex). */
-static hoc_status curve_tangent_at(const hoc_model *model, int c, int vertex, double t_in,
-                                   double *d) {
+hoc_status hoc_curve_tangent_at(const hoc_model *model, int c, int vertex, double t_in, double *d) {
   const hoc_cad_curve *cv = &model->curves[c];
   double t;
   if (cv->v0 == vertex && cv->v1 == vertex) /* closed: the end nearer t_in */
@@ -196,7 +193,7 @@ hoc_status hoc_mesh_element_cusp(const hoc_mesh *mesh, size_t e, double max_angl
                 edge_curve(mesh, e, k, (k + 2) % 3, &t[1])};
     if (c[0] < 0 || c[1] < 0) continue;
     for (int j = 0; j < 2; ++j)
-      HOC_TRY(curve_tangent_at(mesh->model, c[j], mesh->entity[v], t[j], d[j]));
+      HOC_TRY(hoc_curve_tangent_at(mesh->model, c[j], mesh->entity[v], t[j], d[j]));
     double dot = d[0][0] * d[1][0] + d[0][1] * d[1][1] + d[0][2] * d[1][2];
     double angle = acos(dot > 1 ? 1 : dot < -1 ? -1 : dot) * (180 / 3.14159265358979323846);
     if (angle < best) {
