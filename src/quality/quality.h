@@ -45,6 +45,15 @@ typedef struct hoc_quality_tables {
   double *Bx, *By; /* [n_blocks][np][HOC_QB] ideal-space gradients */
   double *Bn;      /* [n_blocks][np][HOC_QB] basis values (normal interpolation) */
   double *Bw;      /* [n_blocks][HOC_QB] weights: w at quadrature points, else 0 */
+  /* The exact fold test of the edges (edges.c), for p >= 2: along edge k
+   * (corner k to k + 1) the columns a1, a2 of D phi are polynomials of
+   * degree p - 1 in the edge's coordinate s, the interpolated normal one
+   * of degree p, and (a1 x a2) . n one of degree 3p - 2. */
+  double *Ge; /* [3][p][np][2] ideal-space gradients at s = (j + 1/2) / p */
+  double *Ca; /* [p][p] values at those s -> Bernstein coefficients, degree p - 1 */
+  double *Cn; /* [p + 1][p + 1] values at the edge's nodes -> Bernstein coefficients, degree p */
+  double *Wb; /* [p][p][p + 1] C(p-1, i) C(p-1, j) C(p, k) / C(3p-2, i+j+k) */
+  int *enode; /* [3][p + 1] local nodes along each edge, from corner k to corner k + 1 */
 } hoc_quality_tables;
 
 enum { HOC_QB = 4 };
@@ -81,6 +90,11 @@ void hoc_quality_stats_from(const double *q, size_t ne, int order, hoc_quality_s
 double hoc_distortion_point(hoc_measure measure, const double a1[3], const double a2[3],
                             const double n[3], double delta, double *sigma, double *g1,
                             double *g2);
+
+/** Fill the edge tables (Ge, Ca, Cn, Wb, enode) of t from its basis
+ *  (tables.c's builder; nothing for p = 1). */
+struct hoc_lagrange;
+hoc_status hoc_quality_edge_tables(hoc_quality_tables *t, const struct hoc_lagrange *basis);
 
 /** Quality of one element (Definition 2 with delta = 0).
  *  @param[in] x  [np][3] node positions
@@ -129,6 +143,22 @@ double hoc_element_node_residuals(const hoc_quality_tables *t, hoc_measure measu
  *  quadrature point, a node or a validation point. Same test as
  *  hoc_element_quality. */
 int hoc_element_tangled(const hoc_quality_tables *t, const double *x, const double *n);
+
+/** Exact fold test of the element's edges: 1 if sigma is clearly negative
+ *  somewhere on an edge, found by Bernstein coefficients of (a1 x a2) . n
+ *  along it and subdivision (pieces down to 2^-14 of the edge); 0 if every
+ *  piece is proven positive or nothing negative is found. 0 for p = 1
+ *  (sigma is then linear along an edge). Sampled tests miss such folds:
+ *  an optimiser that only checks samples can walk nodes until a fold lies
+ *  between them (seen on edges next to slivers and at corners on curves).
+ *  Not yet part of hoc_element_tangled or of measuring: see
+ *  docs/quality.md, "Folds between the samples". */
+int hoc_element_edges_folded(const hoc_quality_tables *t, const double *x, const double *n);
+
+/** The same, with the reference point rs[2] of a fold found (the end of a
+ *  subdivision piece where sigma < 0). */
+int hoc_element_edges_fold_point(const hoc_quality_tables *t, const double *x, const double *n,
+                                 double *rs);
 
 /** The rest of that test: 1 if sigma <= 0 at a node or at a point of the
  *  validation lattice (the order-2p equispaced points), so that no fold can

@@ -31,6 +31,11 @@ static void tables_free(hoc_quality_tables *t) {
   free(t->By);
   free(t->Bn);
   free(t->Bw);
+  free(t->Ge);
+  free(t->Ca);
+  free(t->Cn);
+  free(t->Wb);
+  free(t->enode);
   free(t);
 }
 
@@ -74,6 +79,7 @@ static hoc_status build(int p, hoc_nodeset set, int degree, hoc_quality_tables *
   to_ideal(nq * np, dN, t->G);
   HOC_TRY_GOTO(hoc_lagrange_eval(basis, t->np, t->rs, NULL, dN), fail);
   to_ideal(np * np, dN, t->Gn);
+  HOC_TRY_GOTO(hoc_quality_edge_tables(t, basis), fail);
   {
     /* validation lattice: (i, j) / 2p */
     int m = 2 * p;

@@ -1,0 +1,215 @@
+/* Exact fold test along the edges of a curved triangle: the sign of
+ * sigma = (a1 x a2) . n on an edge from Bernstein coefficients.
+ * SPDX-License-Identifier: GPL-2.0-or-later */
+#include "basis/basis.h"
+#include "quality/quality.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+enum { MAX_D = 3 * HOC_MAX_ORDER - 2, MAX_DEPTH = 14 };
+
+static double binomial(int n, int k) {
+  double c = 1;
+  for (int i = 1; i <= k; ++i)
+    c = c * (n - k + i) / i;
+  return c;
+}
+
+static double bernstein(int m, int i, double s) {
+  return binomial(m, i) * pow(s, i) * pow(1 - s, m - i);
+}
+
+/* inv = V^{-1} for V[r][c] = B_c^m(s_r), r, c = 0..m (Gauss-Jordan with
+ * partial pivoting). */
+static hoc_status bernstein_inverse(int m, const double *s, double *inv) {
+  int n = m + 1;
+  double *a = hoc_calloc((size_t)(n * 2 * n), sizeof *a);
+  if (!a) return HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
+  for (int r = 0; r < n; ++r) {
+    for (int c = 0; c < n; ++c)
+      a[r * 2 * n + c] = bernstein(m, c, s[r]);
+    a[r * 2 * n + n + r] = 1;
+  }
+  for (int c = 0; c < n; ++c) {
+    int piv = c;
+    for (int r = c + 1; r < n; ++r)
+      if (fabs(a[r * 2 * n + c]) > fabs(a[piv * 2 * n + c])) piv = r;
+    if (!(fabs(a[piv * 2 * n + c]) > 0)) {
+      free(a);
+      return HOC_ERROR(HOC_ERR_INTERNAL, "singular Bernstein matrix of degree %d", m);
+    }
+    for (int k = 0; k < 2 * n; ++k) {
+      double tmp = a[c * 2 * n + k];
+      a[c * 2 * n + k] = a[piv * 2 * n + k];
+      a[piv * 2 * n + k] = tmp;
+    }
+    double d = a[c * 2 * n + c];
+    for (int k = 0; k < 2 * n; ++k)
+      a[c * 2 * n + k] /= d;
+    for (int r = 0; r < n; ++r) {
+      if (r == c) continue;
+      double f = a[r * 2 * n + c];
+      if (f != 0)
+        for (int k = 0; k < 2 * n; ++k)
+          a[r * 2 * n + k] -= f * a[c * 2 * n + k];
+    }
+  }
+  for (int r = 0; r < n; ++r)
+    for (int c = 0; c < n; ++c)
+      inv[r * n + c] = a[r * 2 * n + n + c];
+  free(a);
+  return HOC_OK;
+}
+
+hoc_status hoc_quality_edge_tables(hoc_quality_tables *t, const hoc_lagrange *basis) {
+  int p = t->p, np = t->np;
+  if (p < 2) return HOC_OK;
+  size_t np2 = (size_t)np * 2;
+  double *pts = NULL, *dN = NULL, *s = NULL, *sa = NULL;
+  hoc_status status = HOC_OK;
+  HOC_ALLOC_GOTO(t->Ge, 3 * (size_t)p * np2, done);
+  HOC_ALLOC_GOTO(t->Ca, (size_t)p * (size_t)p, done);
+  HOC_ALLOC_GOTO(t->Cn, (size_t)(p + 1) * (size_t)(p + 1), done);
+  HOC_ALLOC_GOTO(t->Wb, (size_t)p * (size_t)p * (size_t)(p + 1), done);
+  HOC_ALLOC_GOTO(t->enode, 3 * (size_t)(p + 1), done);
+  HOC_ALLOC_GOTO(pts, 2 * (size_t)p, done);
+  HOC_ALLOC_GOTO(dN, (size_t)p * np2, done);
+  HOC_ALLOC_GOTO(s, (size_t)p + 1, done);
+  HOC_ALLOC_GOTO(sa, (size_t)p, done);
+  HOC_TRY_GOTO(hoc_edge_nodes(p, t->set, s), done);
+  for (int j = 0; j < p; ++j)
+    sa[j] = (j + 0.5) / p;
+  for (int k = 0; k < 3; ++k) {
+    for (int j = 0; j < p; ++j) {
+      double r[3][2] = {{sa[j], 0}, {1 - sa[j], sa[j]}, {0, 1 - sa[j]}};
+      pts[2 * j] = r[k][0];
+      pts[2 * j + 1] = r[k][1];
+    }
+    HOC_TRY_GOTO(hoc_lagrange_eval(basis, p, pts, NULL, dN), done);
+    const double inv_sqrt3 = 0.57735026918962576451; /* to ideal space, as tables.c */
+    double *G = t->Ge + (size_t)k * (size_t)p * np2;
+    for (size_t i = 0; i < (size_t)p * (size_t)np; ++i) {
+      double dr = dN[2 * i], ds = dN[2 * i + 1];
+      G[2 * i] = dr;
+      G[2 * i + 1] = (2 * ds - dr) * inv_sqrt3;
+    }
+    int *en = t->enode + k * (p + 1);
+    en[0] = k;
+    en[p] = (k + 1) % 3;
+    for (int j = 0; j < p - 1; ++j)
+      en[1 + j] = 3 + k * (p - 1) + j;
+  }
+  HOC_TRY_GOTO(bernstein_inverse(p - 1, sa, t->Ca), done);
+  HOC_TRY_GOTO(bernstein_inverse(p, s, t->Cn), done);
+  for (int i = 0; i < p; ++i)
+    for (int j = 0; j < p; ++j)
+      for (int k = 0; k <= p; ++k)
+        t->Wb[((size_t)i * p + (size_t)j) * (size_t)(p + 1) + (size_t)k] =
+            binomial(p - 1, i) * binomial(p - 1, j) * binomial(p, k) /
+            binomial(3 * p - 2, i + j + k);
+done:
+  free(pts);
+  free(dN);
+  free(s);
+  free(sa);
+  return status;
+}
+
+/* 1 if the polynomial with Bernstein coefficients c[0..d] on [a, b] is
+ * below -tol at the end of some piece of a subdivision into halves down to
+ * `depth` more levels (*where: that end); 0 once every piece has all
+ * coefficients > 0 or nothing is found. */
+static int negative_somewhere(const double *c, int d, double tol, int depth, double a, double b,
+                              double *where) {
+  if (c[0] < -tol || c[d] < -tol) {
+    *where = c[0] < -tol ? a : b;
+    return 1;
+  }
+  int positive = 1;
+  for (int l = 0; l <= d && positive; ++l)
+    positive = c[l] > 0;
+  if (positive || depth == 0) return 0;
+  double w[MAX_D + 1], left[MAX_D + 1], right[MAX_D + 1];
+  memcpy(w, c, (size_t)(d + 1) * sizeof *w);
+  left[0] = w[0];
+  right[d] = w[d];
+  for (int r = 1; r <= d; ++r) {
+    for (int i = 0; i <= d - r; ++i)
+      w[i] = 0.5 * (w[i] + w[i + 1]);
+    left[r] = w[0];
+    right[d - r] = w[d - r];
+  }
+  double mid = 0.5 * (a + b);
+  return negative_somewhere(left, d, tol, depth - 1, a, mid, where) ||
+         negative_somewhere(right, d, tol, depth - 1, mid, b, where);
+}
+
+int hoc_element_edges_fold_point(const hoc_quality_tables *t, const double *x, const double *n,
+                                 double *rs) {
+  int p = t->p, np = t->np, d = 3 * p - 2;
+  if (p < 2 || !t->Ge) return 0;
+  double A1[HOC_MAX_ORDER][3], A2[HOC_MAX_ORDER][3], B1[HOC_MAX_ORDER][3], B2[HOC_MAX_ORDER][3];
+  double Bn[HOC_MAX_ORDER + 1][3], c[MAX_D + 1];
+  for (int k = 0; k < 3; ++k) {
+    const double *G = t->Ge + (size_t)k * (size_t)p * (size_t)np * 2;
+    for (int j = 0; j < p; ++j) {
+      double a1[3] = {0, 0, 0}, a2[3] = {0, 0, 0};
+      const double *g = G + (size_t)j * (size_t)np * 2;
+      for (int i = 0; i < np; ++i)
+        for (int q = 0; q < 3; ++q) {
+          a1[q] += g[2 * i] * x[3 * i + q];
+          a2[q] += g[2 * i + 1] * x[3 * i + q];
+        }
+      memcpy(A1[j], a1, sizeof a1);
+      memcpy(A2[j], a2, sizeof a2);
+    }
+    for (int i = 0; i < p; ++i)
+      for (int q = 0; q < 3; ++q) {
+        double s1 = 0, s2 = 0;
+        for (int j = 0; j < p; ++j) {
+          s1 += t->Ca[i * p + j] * A1[j][q];
+          s2 += t->Ca[i * p + j] * A2[j][q];
+        }
+        B1[i][q] = s1;
+        B2[i][q] = s2;
+      }
+    const int *en = t->enode + k * (p + 1);
+    for (int i = 0; i <= p; ++i)
+      for (int q = 0; q < 3; ++q) {
+        double sn = 0;
+        for (int j = 0; j <= p; ++j)
+          sn += t->Cn[i * (p + 1) + j] * n[3 * en[j] + q];
+        Bn[i][q] = sn;
+      }
+    for (int l = 0; l <= d; ++l)
+      c[l] = 0;
+    double scale = 0;
+    for (int i = 0; i < p; ++i)
+      for (int j = 0; j < p; ++j) {
+        double X[3] = {B1[i][1] * B2[j][2] - B1[i][2] * B2[j][1],
+                       B1[i][2] * B2[j][0] - B1[i][0] * B2[j][2],
+                       B1[i][0] * B2[j][1] - B1[i][1] * B2[j][0]};
+        const double *W = t->Wb + ((size_t)i * p + (size_t)j) * (size_t)(p + 1);
+        for (int m = 0; m <= p; ++m) {
+          double v = W[m] * (X[0] * Bn[m][0] + X[1] * Bn[m][1] + X[2] * Bn[m][2]);
+          c[i + j + m] += v;
+          scale = fmax(scale, fabs(v));
+        }
+      }
+    double s;
+    if (negative_somewhere(c, d, 1e-10 * scale, MAX_DEPTH, 0.0, 1.0, &s)) {
+      double r[3][2] = {{s, 0}, {1 - s, s}, {0, 1 - s}};
+      rs[0] = r[k][0];
+      rs[1] = r[k][1];
+      return 1;
+    }
+  }
+  return 0;
+}
+
+int hoc_element_edges_folded(const hoc_quality_tables *t, const double *x, const double *n) {
+  double rs[2];
+  return hoc_element_edges_fold_point(t, x, n, rs);
+}
