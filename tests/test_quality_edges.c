@@ -76,9 +76,9 @@ static double edges_min(const edge_points *e, const double *x, const double *n) 
   return mn;
 }
 
-static void check_order(int p, double amplitude, int trials, int *hidden_total) {
+static void check_order(int p, hoc_nodeset set, double amplitude, int trials, int *hidden_total) {
   const hoc_quality_tables *t;
-  CHECK_OK(hoc_quality_tables_get(p, HOC_NODES_EQUISPACED, &t));
+  CHECK_OK(hoc_quality_tables_get(p, set, &t));
   int np = t->np;
   hoc_lagrange *b = NULL;
   CHECK_OK(hoc_lagrange_create(p, t->rs, &b));
@@ -109,8 +109,9 @@ static void check_order(int p, double amplitude, int trials, int *hidden_total) 
       ++ambiguous;
     }
   }
-  printf("p=%d: %d folded (%d between the lattice's edge points), %d valid, %d within 1e-6 of 0\n",
-         p, folded, hidden, valid, ambiguous);
+  printf("p=%d, node set %d: %d folded (%d between the lattice's edge points), %d valid, %d "
+         "within 1e-6 of 0\n",
+         p, (int)set, folded, hidden, valid, ambiguous);
   CHECK(folded > 0 && valid > 0);
   *hidden_total += hidden;
   hoc_lagrange_destroy(&b);
@@ -124,11 +125,14 @@ static void check_order(int p, double amplitude, int trials, int *hidden_total) 
 
 int main(void) {
   int hidden = 0;
-  check_order(2, 0.5, 300, &hidden);
-  check_order(3, 0.5, 600, &hidden);
-  check_order(4, 0.45, 300, &hidden);
-  check_order(6, 0.25, 100, &hidden);
-  check_order(10, 0.12, 40, &hidden);
+  check_order(2, HOC_NODES_EQUISPACED, 0.5, 300, &hidden);
+  check_order(3, HOC_NODES_EQUISPACED, 0.5, 600, &hidden);
+  check_order(4, HOC_NODES_EQUISPACED, 0.45, 300, &hidden);
+  check_order(6, HOC_NODES_EQUISPACED, 0.25, 100, &hidden);
+  check_order(10, HOC_NODES_EQUISPACED, 0.12, 40, &hidden);
+  /* the other node sets' edge positions (their value-to-Bernstein maps) */
+  check_order(4, HOC_NODES_FEKETE, 0.45, 100, &hidden);
+  check_order(6, HOC_NODES_WARP_BLEND, 0.25, 60, &hidden);
   CHECK(hidden > 0);
   /* a straight element is not folded; p = 1 never is (sigma linear on an edge) */
   const hoc_quality_tables *t;
@@ -141,6 +145,12 @@ int main(void) {
   CHECK(hoc_element_edges_folded(t, x, n) == 0);
   for (int i = 0; i < t->np; ++i)
     n[3 * i + 2] = -1; /* seen from below: negative everywhere */
+  CHECK(hoc_element_edges_folded(t, x, n) == 1);
+  /* collapsed to a point, or not a number: folded, not a long search */
+  for (int i = 0; i < 3 * t->np; ++i)
+    x[i] = 0;
+  CHECK(hoc_element_edges_folded(t, x, n) == 1);
+  x[4] = NAN;
   CHECK(hoc_element_edges_folded(t, x, n) == 1);
   return test_report();
 }

@@ -171,7 +171,12 @@ static hoc_status cusp_grading(const hoc_mesh *in, const size_t *elem_edge, cons
         }
         const size_t *ln = in->line_conn + 2 * l;
         double t_far = in->line_t[2 * l + (ln[0] == v ? 1 : 0)];
-        HOC_TRY(hoc_curve_tangent_at(in->model, in->line_curve[l], in->entity[v], t_far, d[j]));
+        if (hoc_curve_tangent_at(in->model, in->line_curve[l], in->entity[v], t_far, d[j]) !=
+            HOC_OK) { /* no tangent there: not a cusp we can tell, evenly spaced */
+          hoc_error_clear();
+          ok = 0;
+          break;
+        }
         for (int c = 0; c < 3; ++c)
           w[j][c] = in->xyz[3 * other[j] + c] - in->xyz[3 * v + c];
       }

@@ -198,8 +198,29 @@ int hoc_element_edges_fold_point(const hoc_quality_tables *t, const double *x, c
           scale = fmax(scale, fabs(v));
         }
       }
-    double s;
-    if (negative_somewhere(c, d, 1e-10 * scale, MAX_DEPTH, 0.0, 1.0, &s)) {
+    /* the corners directly (node gradients), not extrapolated from the
+     * samples: they are where sigma comes closest to 0 at a cusp */
+    for (int end = 0; end < 2; ++end) {
+      int node = en[end ? p : 0];
+      const double *g = t->Gn + (size_t)node * (size_t)np * 2;
+      double a1[3] = {0, 0, 0}, a2[3] = {0, 0, 0};
+      for (int i = 0; i < np; ++i)
+        for (int q = 0; q < 3; ++q) {
+          a1[q] += g[2 * i] * x[3 * i + q];
+          a2[q] += g[2 * i + 1] * x[3 * i + q];
+        }
+      const double *nn = n + 3 * node;
+      c[end ? d : 0] = (a1[1] * a2[2] - a1[2] * a2[1]) * nn[0] +
+                       (a1[2] * a2[0] - a1[0] * a2[2]) * nn[1] +
+                       (a1[0] * a2[1] - a1[1] * a2[0]) * nn[2];
+    }
+    double s = 0.5;
+    /* sigma identically 0 or not a number: folded (degenerate), without
+     * subdividing to the end */
+    int degenerate = !(scale > 0) || !isfinite(scale);
+    for (int l = 0; l <= d && !degenerate; ++l)
+      degenerate = !isfinite(c[l]);
+    if (degenerate || negative_somewhere(c, d, 1e-10 * scale, MAX_DEPTH, 0.0, 1.0, &s)) {
       double r[3][2] = {{s, 0}, {1 - s, s}, {0, 1 - s}};
       rs[0] = r[k][0];
       rs[1] = r[k][1];
