@@ -161,35 +161,29 @@ static hoc_status cusp_grading(const hoc_mesh *in, const size_t *elem_edge, cons
       if (in->dim[v] != HOC_ON_VERTEX) continue;
       size_t id[2] = {elem_edge[3 * e + (size_t)k], elem_edge[3 * e + (size_t)(k + 2) % 3]};
       size_t other[2] = {cn[(k + 1) % 3], cn[(k + 2) % 3]};
-      double d[2][3], w[2][3];
-      int ok = 1;
-      for (int j = 0; j < 2 && ok; ++j) {
+      int c[2];
+      double t_far[2], w[2][3], lw[2];
+      int j = 0;
+      for (; j < 2; ++j) {
         size_t l = edge_line[id[j]];
-        if (l == SIZE_MAX) {
-          ok = 0;
-          break;
-        }
+        if (l == SIZE_MAX) break; /* not on a CAD curve */
         const size_t *ln = in->line_conn + 2 * l;
-        double t_far = in->line_t[2 * l + (ln[0] == v ? 1 : 0)];
-        if (hoc_curve_tangent_at(in->model, in->line_curve[l], in->entity[v], t_far, d[j]) !=
-            HOC_OK) { /* no tangent there: not a cusp we can tell, evenly spaced */
-          hoc_error_clear();
-          ok = 0;
-          break;
-        }
-        for (int c = 0; c < 3; ++c)
-          w[j][c] = in->xyz[3 * other[j] + c] - in->xyz[3 * v + c];
+        c[j] = in->line_curve[l];
+        t_far[j] = in->line_t[2 * l + (ln[0] == v ? 1 : 0)];
+        for (int q = 0; q < 3; ++q)
+          w[j][q] = in->xyz[3 * other[j] + q] - in->xyz[3 * v + q];
+        lw[j] = sqrt(w[j][0] * w[j][0] + w[j][1] * w[j][1] + w[j][2] * w[j][2]);
       }
-      if (!ok) continue;
-      double curves =
-          acos(fmax(-1.0, fmin(1.0, d[0][0] * d[1][0] + d[0][1] * d[1][1] + d[0][2] * d[1][2])));
-      double lw0 = sqrt(w[0][0] * w[0][0] + w[0][1] * w[0][1] + w[0][2] * w[0][2]);
-      double lw1 = sqrt(w[1][0] * w[1][0] + w[1][1] * w[1][1] + w[1][2] * w[1][2]);
-      if (!(lw0 > 0 && lw1 > 0)) continue;
-      double c01 = (w[0][0] * w[1][0] + w[0][1] * w[1][1] + w[0][2] * w[1][2]) / (lw0 * lw1);
+      if (j < 2 || !(lw[0] > 0 && lw[1] > 0)) continue;
+      double curves;
+      if (hoc_curves_angle_at(in->model, in->entity[v], c, t_far, &curves) != HOC_OK) {
+        hoc_error_clear(); /* no tangent there: not a cusp we can tell, evenly spaced */
+        continue;
+      }
+      double c01 = (w[0][0] * w[1][0] + w[0][1] * w[1][1] + w[0][2] * w[1][2]) / (lw[0] * lw[1]);
       double corner = acos(fmax(-1.0, fmin(1.0, c01)));
       if (!(curves < 0.5 * corner)) continue;
-      for (int j = 0; j < 2; ++j)
+      for (j = 0; j < 2; ++j)
         grade[id[j]] = grade[id[j]] == SIZE_MAX || grade[id[j]] == v ? v : both;
     }
   }

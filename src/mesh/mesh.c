@@ -132,7 +132,10 @@ static hoc_status group_nodes(const hoc_mesh *m, int dim, int n_entities, size_t
 
 /* Cusps ------------------------------------------------------------------- */
 
-hoc_status hoc_curve_tangent_at(const hoc_model *model, int c, int vertex, double t_in, double *d) {
+/* Unit tangent at CAD vertex `vertex` of curve c, pointing into the curve
+ * towards parameter t_in (a point of the curve near the vertex). */
+static hoc_status curve_tangent_at(const hoc_model *model, int c, int vertex, double t_in,
+                                   double *d) {
   const hoc_cad_curve *cv = &model->curves[c];
   double t;
   if (cv->v0 == vertex && cv->v1 == vertex) /* closed: the end nearer t_in */
@@ -148,6 +151,16 @@ hoc_status hoc_curve_tangent_at(const hoc_model *model, int c, int vertex, doubl
   HOC_TRY(hoc_cad_curve_eval(model, c, 1, &t, x, d));
   double s = t_in >= t ? 1.0 : -1.0, len = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
   for (int k = 0; k < 3; ++k) d[k] = len > 0 ? s * d[k] / len : 0.0;
+  return HOC_OK;
+}
+
+hoc_status hoc_curves_angle_at(const hoc_model *model, int vertex, const int c[2],
+                               const double t_in[2], double *angle) {
+  double d[2][3];
+  for (int j = 0; j < 2; ++j)
+    HOC_TRY(curve_tangent_at(model, c[j], vertex, t_in[j], d[j]));
+  double dot = d[0][0] * d[1][0] + d[0][1] * d[1][1] + d[0][2] * d[1][2];
+  *angle = acos(dot > 1 ? 1 : dot < -1 ? -1 : dot);
   return HOC_OK;
 }
 
@@ -188,14 +201,12 @@ hoc_status hoc_mesh_element_cusp(const hoc_mesh *mesh, size_t e, double max_angl
   for (int k = 0; k < 3; ++k) {
     size_t v = cn[k];
     if (mesh->dim[v] != HOC_ON_VERTEX) continue;
-    double t[2], d[2][3];
+    double t[2], angle;
     int c[2] = {edge_curve(mesh, e, k, (k + 1) % 3, &t[0]),
                 edge_curve(mesh, e, k, (k + 2) % 3, &t[1])};
     if (c[0] < 0 || c[1] < 0) continue;
-    for (int j = 0; j < 2; ++j)
-      HOC_TRY(hoc_curve_tangent_at(mesh->model, c[j], mesh->entity[v], t[j], d[j]));
-    double dot = d[0][0] * d[1][0] + d[0][1] * d[1][1] + d[0][2] * d[1][2];
-    double angle = acos(dot > 1 ? 1 : dot < -1 ? -1 : dot) * (180 / 3.14159265358979323846);
+    HOC_TRY(hoc_curves_angle_at(mesh->model, mesh->entity[v], c, t, &angle));
+    angle *= 180 / 3.14159265358979323846;
     if (angle < best) {
       best = angle;
       *found = 1;

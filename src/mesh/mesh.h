@@ -129,10 +129,11 @@ hoc_status hoc_mesh_update_xyz(hoc_mesh *mesh);
 hoc_status hoc_split_groups(const size_t *start, int n_groups, size_t size, size_t **pieces,
                             size_t *n_pieces);
 
-/** Unit tangent at CAD vertex `vertex` (an index) of curve c (an index),
- *  pointing into the curve towards parameter t_in (a point of the curve
- *  near the vertex). d[3]. */
-hoc_status hoc_curve_tangent_at(const hoc_model *model, int c, int vertex, double t_in, double *d);
+/** Angle (radians) at CAD vertex `vertex` between curves c[0] and c[1]
+ *  (indices), each tangent pointing into its curve towards parameter
+ *  t_in[j] (a point of the curve near the vertex): 0 at a cusp. */
+hoc_status hoc_curves_angle_at(const hoc_model *model, int vertex, const int c[2],
+                               const double t_in[2], double *angle);
 
 /** Unit normals at every slot (oriented by face_orient, NaN-free: at a pole
  *  the normal comes from the nearby interior of the face). normal[n_slots][3]. */

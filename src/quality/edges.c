@@ -63,6 +63,30 @@ static hoc_status bernstein_inverse(int m, const double *s, double *inv) {
   return HOC_OK;
 }
 
+/* Reference coordinates rs[2] of the point at s of edge k (corner k at
+ * s = 0, corner k + 1 at s = 1). */
+static void edge_point(int k, double s, double *rs) {
+  const double r[3][2] = {{s, 0}, {1 - s, s}, {0, 1 - s}};
+  rs[0] = r[k][0];
+  rs[1] = r[k][1];
+}
+
+/* The columns a1, a2 of D phi from gradients g[np][2] at one point. */
+static void columns(const double *g, const double *x, int np, double *a1, double *a2) {
+  for (int q = 0; q < 3; ++q)
+    a1[q] = a2[q] = 0;
+  for (int i = 0; i < np; ++i)
+    for (int q = 0; q < 3; ++q) {
+      a1[q] += g[2 * i] * x[3 * i + q];
+      a2[q] += g[2 * i + 1] * x[3 * i + q];
+    }
+}
+
+static double triple(const double *a1, const double *a2, const double *n) {
+  return (a1[1] * a2[2] - a1[2] * a2[1]) * n[0] + (a1[2] * a2[0] - a1[0] * a2[2]) * n[1] +
+         (a1[0] * a2[1] - a1[1] * a2[0]) * n[2];
+}
+
 hoc_status hoc_quality_edge_tables(hoc_quality_tables *t, const hoc_lagrange *basis) {
   int p = t->p, np = t->np;
   if (p < 2) return HOC_OK;
@@ -82,11 +106,8 @@ hoc_status hoc_quality_edge_tables(hoc_quality_tables *t, const hoc_lagrange *ba
   for (int j = 0; j < p; ++j)
     sa[j] = (j + 0.5) / p;
   for (int k = 0; k < 3; ++k) {
-    for (int j = 0; j < p; ++j) {
-      double r[3][2] = {{sa[j], 0}, {1 - sa[j], sa[j]}, {0, 1 - sa[j]}};
-      pts[2 * j] = r[k][0];
-      pts[2 * j + 1] = r[k][1];
-    }
+    for (int j = 0; j < p; ++j)
+      edge_point(k, sa[j], pts + 2 * j);
     HOC_TRY_GOTO(hoc_lagrange_eval(basis, p, pts, NULL, dN), done);
     const double inv_sqrt3 = 0.57735026918962576451; /* to ideal space, as tables.c */
     double *G = t->Ge + (size_t)k * (size_t)p * np2;
@@ -117,16 +138,12 @@ done:
   return status;
 }
 
-/* 1 if the polynomial with Bernstein coefficients c[0..d] on [a, b] is
- * below -tol at the end of some piece of a subdivision into halves down to
- * `depth` more levels (*where: that end); 0 once every piece has all
- * coefficients > 0 or nothing is found. */
-static int negative_somewhere(const double *c, int d, double tol, int depth, double a, double b,
-                              double *where) {
-  if (c[0] < -tol || c[d] < -tol) {
-    *where = c[0] < -tol ? a : b;
-    return 1;
-  }
+/* 1 if the polynomial with Bernstein coefficients c[0..d] is below -tol
+ * at an end of some piece of a subdivision into halves down to `depth`
+ * more levels; 0 once every piece has all coefficients > 0 or nothing is
+ * found. */
+static int negative_somewhere(const double *c, int d, double tol, int depth) {
+  if (c[0] < -tol || c[d] < -tol) return 1;
   int positive = 1;
   for (int l = 0; l <= d && positive; ++l)
     positive = c[l] > 0;
@@ -141,30 +158,19 @@ static int negative_somewhere(const double *c, int d, double tol, int depth, dou
     left[r] = w[0];
     right[d - r] = w[d - r];
   }
-  double mid = 0.5 * (a + b);
-  return negative_somewhere(left, d, tol, depth - 1, a, mid, where) ||
-         negative_somewhere(right, d, tol, depth - 1, mid, b, where);
+  return negative_somewhere(left, d, tol, depth - 1) ||
+         negative_somewhere(right, d, tol, depth - 1);
 }
 
-int hoc_element_edges_fold_point(const hoc_quality_tables *t, const double *x, const double *n,
-                                 double *rs) {
+int hoc_element_edges_folded(const hoc_quality_tables *t, const double *x, const double *n) {
   int p = t->p, np = t->np, d = 3 * p - 2;
   if (p < 2 || !t->Ge) return 0;
   double A1[HOC_MAX_ORDER][3], A2[HOC_MAX_ORDER][3], B1[HOC_MAX_ORDER][3], B2[HOC_MAX_ORDER][3];
   double Bn[HOC_MAX_ORDER + 1][3], c[MAX_D + 1];
   for (int k = 0; k < 3; ++k) {
     const double *G = t->Ge + (size_t)k * (size_t)p * (size_t)np * 2;
-    for (int j = 0; j < p; ++j) {
-      double a1[3] = {0, 0, 0}, a2[3] = {0, 0, 0};
-      const double *g = G + (size_t)j * (size_t)np * 2;
-      for (int i = 0; i < np; ++i)
-        for (int q = 0; q < 3; ++q) {
-          a1[q] += g[2 * i] * x[3 * i + q];
-          a2[q] += g[2 * i + 1] * x[3 * i + q];
-        }
-      memcpy(A1[j], a1, sizeof a1);
-      memcpy(A2[j], a2, sizeof a2);
-    }
+    for (int j = 0; j < p; ++j)
+      columns(G + (size_t)j * (size_t)np * 2, x, np, A1[j], A2[j]);
     for (int i = 0; i < p; ++i)
       for (int q = 0; q < 3; ++q) {
         double s1 = 0, s2 = 0;
@@ -188,12 +194,9 @@ int hoc_element_edges_fold_point(const hoc_quality_tables *t, const double *x, c
     double scale = 0;
     for (int i = 0; i < p; ++i)
       for (int j = 0; j < p; ++j) {
-        double X[3] = {B1[i][1] * B2[j][2] - B1[i][2] * B2[j][1],
-                       B1[i][2] * B2[j][0] - B1[i][0] * B2[j][2],
-                       B1[i][0] * B2[j][1] - B1[i][1] * B2[j][0]};
         const double *W = t->Wb + ((size_t)i * p + (size_t)j) * (size_t)(p + 1);
         for (int m = 0; m <= p; ++m) {
-          double v = W[m] * (X[0] * Bn[m][0] + X[1] * Bn[m][1] + X[2] * Bn[m][2]);
+          double v = W[m] * triple(B1[i], B2[j], Bn[m]);
           c[i + j + m] += v;
           scale = fmax(scale, fabs(v));
         }
@@ -202,35 +205,16 @@ int hoc_element_edges_fold_point(const hoc_quality_tables *t, const double *x, c
      * samples: they are where sigma comes closest to 0 at a cusp */
     for (int end = 0; end < 2; ++end) {
       int node = en[end ? p : 0];
-      const double *g = t->Gn + (size_t)node * (size_t)np * 2;
-      double a1[3] = {0, 0, 0}, a2[3] = {0, 0, 0};
-      for (int i = 0; i < np; ++i)
-        for (int q = 0; q < 3; ++q) {
-          a1[q] += g[2 * i] * x[3 * i + q];
-          a2[q] += g[2 * i + 1] * x[3 * i + q];
-        }
-      const double *nn = n + 3 * node;
-      c[end ? d : 0] = (a1[1] * a2[2] - a1[2] * a2[1]) * nn[0] +
-                       (a1[2] * a2[0] - a1[0] * a2[2]) * nn[1] +
-                       (a1[0] * a2[1] - a1[1] * a2[0]) * nn[2];
+      double a1[3], a2[3];
+      columns(t->Gn + (size_t)node * (size_t)np * 2, x, np, a1, a2);
+      c[end ? d : 0] = triple(a1, a2, n + 3 * node);
     }
-    double s = 0.5;
     /* sigma identically 0 or not a number: folded (degenerate), without
      * subdividing to the end */
     int degenerate = !(scale > 0) || !isfinite(scale);
     for (int l = 0; l <= d && !degenerate; ++l)
       degenerate = !isfinite(c[l]);
-    if (degenerate || negative_somewhere(c, d, 1e-10 * scale, MAX_DEPTH, 0.0, 1.0, &s)) {
-      double r[3][2] = {{s, 0}, {1 - s, s}, {0, 1 - s}};
-      rs[0] = r[k][0];
-      rs[1] = r[k][1];
-      return 1;
-    }
+    if (degenerate || negative_somewhere(c, d, 1e-10 * scale, MAX_DEPTH)) return 1;
   }
   return 0;
-}
-
-int hoc_element_edges_folded(const hoc_quality_tables *t, const double *x, const double *n) {
-  double rs[2];
-  return hoc_element_edges_fold_point(t, x, n, rs);
 }

@@ -155,11 +155,6 @@ int hoc_element_tangled(const hoc_quality_tables *t, const double *x, const doub
  *  docs/quality.md, "Folds between the samples". */
 int hoc_element_edges_folded(const hoc_quality_tables *t, const double *x, const double *n);
 
-/** The same, with the reference point rs[2] of a fold found (the end of a
- *  subdivision piece where sigma < 0). */
-int hoc_element_edges_fold_point(const hoc_quality_tables *t, const double *x, const double *n,
-                                 double *rs);
-
 /** The rest of that test: 1 if sigma <= 0 at a node or at a point of the
  *  validation lattice (the order-2p equispaced points), so that no fold can
  *  hide between quadrature points. (The residual functions return the
