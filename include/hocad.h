@@ -202,7 +202,9 @@ typedef struct hoc_quality_stats {
   size_t elements; /**< number of elements */
   int order;       /**< element order */
   double min, max, mean, std; /**< of q over the elements (tangled count as 0) */
-  size_t tangled;  /**< elements with det <= 0 at a quadrature point or node */
+  size_t tangled;             /**< elements with sigma <= 0 somewhere: at a quadrature point, a
+                                   node or a lattice point, or between them by the exact fold
+                                   tests (docs/quality.md) */
   double seconds;  /**< wall time of the measurement */
 } hoc_quality_stats;
 
@@ -322,6 +324,9 @@ typedef struct hoc_optimize_result {
                              first reached (0: the start); long before `iterations`
                              when untangling stalled */
   int second_attempt;   /**< first sweep of the second attempt (0: none was needed) */
+  int exact_phase;      /**< first sweep of the exact phase: sweeps after the samples
+                             said untangled but the exact edge test found folds between
+                             them (0: none was needed) */
   int stopped_at_limit; /**< elements were still tangled when the last attempt had used all
                              its sweeps (not ended early by the 40-sweep stall rule or by
                              every node sleeping) */
@@ -336,7 +341,11 @@ typedef struct hoc_optimize_result {
  *  nodes on CAD curves slide along the curve in t (unless fix_curves), CAD
  *  vertices are fixed; every position is evaluated on the CAD. A step never
  *  leaves a face's parametric domain and never tangles a valid element,
- *  except next to a fold while untangling stalls (docs/quality.md).
+ *  except next to a fold while untangling stalls (docs/quality.md). The
+ *  tangle test looks at samples until they say untangled, then, if the
+ *  exact fold test of measuring finds folds between them, at the exact
+ *  test too for the sweeps after (result.exact_phase); tangled_final
+ *  counts by the exact test, as hoc_mesh_measure does.
  *  Deterministic, whatever the thread count.
  *  @param[in,out] mesh  the mesh, changed in place: the final state, or, if
  *                       that has more tangled elements than an earlier one,

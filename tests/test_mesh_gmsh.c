@@ -10,6 +10,7 @@
 #include <gmshc.h>
 #include <math.h>
 #include <omp.h>
+#include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -318,6 +319,31 @@ static int log_tangled(void *user, const hoc_optimize_iteration *it) {
   return 0;
 }
 
+/* Elements tangled by the samples alone (quadrature points, nodes,
+ * lattice): the count the optimiser's first phase reports per sweep. */
+static size_t sampled_tangled(const hoc_mesh *m) {
+  const hoc_quality_tables *t;
+  size_t np = (size_t)m->np, count = 0;
+  double *nrm = malloc(3 * m->n_slots * sizeof *nrm), *x = malloc(6 * np * sizeof *x);
+  if (!nrm || !x || hoc_quality_tables_get(m->order, m->nodeset, &t) ||
+      hoc_mesh_slot_normals(m, nrm)) {
+    free(nrm);
+    free(x);
+    return SIZE_MAX;
+  }
+  for (size_t e = 0; e < m->n_elems; ++e) {
+    for (size_t i = 0; i < np; ++i)
+      for (int c = 0; c < 3; ++c) {
+        x[3 * i + (size_t)c] = m->xyz[3 * m->conn[e * np + i] + (size_t)c];
+        x[3 * (np + i) + (size_t)c] = nrm[3 * m->elem_slot[e * np + i] + (size_t)c];
+      }
+    count += (size_t)hoc_element_tangled(t, x, x + 3 * np, 0);
+  }
+  free(nrm);
+  free(x);
+  return count;
+}
+
 static void test_best_state_kept(void) {
   hoc_model *model = open_bundled("occt_bottle.brep");
   if (!model) return;
@@ -348,15 +374,18 @@ static void test_best_state_kept(void) {
     if (i && i < 10 && log.count[i] > log.count[i - 1]) rose = 1;
   }
   CHECK(rose && log.count[9] > fewest_first); /* the case this test is about */
-  CHECK(res.tangled_final == fewest && fewest <= fewest_first);
+  /* the sweeps count by the samples (the first phase), the result by the
+   * exact test too, as measuring does */
+  CHECK(sampled_tangled(m) == fewest && fewest <= fewest_first);
   int first = 0; /* the sweep after which the fewest were first reached */
   while (first < log.n && log.count[first] != fewest) ++first;
   CHECK(res.best_iteration == first + 1);
   hoc_quality_stats st;
   CHECK_OK(hoc_mesh_measure(m, HOC_MEASURE_SHAPE, NULL, NULL, &st));
-  CHECK(st.tangled == fewest);
-  printf("bottle order 6, 10 + %d sweeps: tangled %zu after the first 10, %zu returned\n",
-         log.n - 10, log.count[9], st.tangled);
+  CHECK(st.tangled == res.tangled_final && st.tangled >= fewest);
+  printf("bottle order 6, 10 + %d sweeps: tangled %zu after the first 10, %zu returned (%zu by "
+         "the samples)\n",
+         log.n - 10, log.count[9], st.tangled, fewest);
   hoc_mesh_destroy(&m);
   hoc_mesh_destroy(&lin);
   hoc_model_destroy(&model);

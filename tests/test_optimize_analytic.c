@@ -85,7 +85,11 @@ static void check_kind(hoc_analytic_kind kind, double a, double b, int nu, int n
          before.tangled, after.tangled, before.min, after.min, r.iterations);
   CHECK(after.tangled == 0);
   CHECK(r.tangled_final == 0 && r.tangled_initial == before.tangled);
-  CHECK(r.second_attempt == 0 && !r.stopped_at_limit); /* untangled in the first */
+  /* the samples' untangling needs no second attempt; the exact phase
+   * (folds between the samples: the cylinder's, at corners on its rims)
+   * may */
+  CHECK((r.second_attempt == 0 || (r.exact_phase && r.second_attempt > r.exact_phase)) &&
+        !r.stopped_at_limit);
   CHECK(after.min > 0.3);
   CHECK_OK(hoc_mesh_check_gradient(m, HOC_MEASURE_SHAPE, 0, 50, &gerr));
   CHECK(gerr < 1e-6);

@@ -76,7 +76,8 @@ static double edges_min(const edge_points *e, const double *x, const double *n) 
   return mn;
 }
 
-static void check_order(int p, hoc_nodeset set, double amplitude, int trials, int *hidden_total) {
+static void check_order(int p, hoc_nodeset set, double amplitude, int trials, int *hidden_total,
+                        int *sampled_miss) {
   const hoc_quality_tables *t;
   CHECK_OK(hoc_quality_tables_get(p, set, &t));
   int np = t->np;
@@ -100,8 +101,18 @@ static void check_order(int p, hoc_nodeset set, double amplitude, int trials, in
     double mn = edges_min(&dense, x, n);
     if (mn < -1e-6) {
       CHECK(exact == 1);
+      /* measuring counts it tangled, whatever the samples say */
+      double eta;
+      CHECK(hoc_element_quality(t, HOC_MEASURE_SHAPE, x, n, &eta, NULL) == 0.0);
+      CHECK(hoc_element_tangled(t, x, n, 1) == 1);
+      CHECK(hoc_element_nodes_tangled(t, x, n, 1) == 1);
       ++folded;
       if (edges_min(&lattice, x, n) > 0) ++hidden; /* between the lattice's points */
+      if (!hoc_element_tangled(t, x, n, 0)) {
+        /* only the exact test sees it: the samples alone say valid */
+        CHECK(hoc_element_quality_test(t, HOC_MEASURE_SHAPE, x, n, 0, &eta, NULL) > 0);
+        ++*sampled_miss;
+      }
     } else if (mn > 1e-6) {
       CHECK(exact == 0);
       ++valid;
@@ -124,16 +135,19 @@ static void check_order(int p, hoc_nodeset set, double amplitude, int trials, in
 }
 
 int main(void) {
-  int hidden = 0;
-  check_order(2, HOC_NODES_EQUISPACED, 0.5, 300, &hidden);
-  check_order(3, HOC_NODES_EQUISPACED, 0.5, 600, &hidden);
-  check_order(4, HOC_NODES_EQUISPACED, 0.45, 300, &hidden);
-  check_order(6, HOC_NODES_EQUISPACED, 0.25, 100, &hidden);
-  check_order(10, HOC_NODES_EQUISPACED, 0.12, 40, &hidden);
+  int hidden = 0, sampled_miss = 0;
+  check_order(2, HOC_NODES_EQUISPACED, 0.5, 300, &hidden, &sampled_miss);
+  check_order(3, HOC_NODES_EQUISPACED, 0.5, 600, &hidden, &sampled_miss);
+  check_order(4, HOC_NODES_EQUISPACED, 0.45, 300, &hidden, &sampled_miss);
+  check_order(6, HOC_NODES_EQUISPACED, 0.25, 100, &hidden, &sampled_miss);
+  check_order(10, HOC_NODES_EQUISPACED, 0.12, 40, &hidden, &sampled_miss);
   /* the other node sets' edge positions (their value-to-Bernstein maps) */
-  check_order(4, HOC_NODES_FEKETE, 0.45, 100, &hidden);
-  check_order(6, HOC_NODES_WARP_BLEND, 0.25, 60, &hidden);
+  check_order(4, HOC_NODES_FEKETE, 0.45, 100, &hidden, &sampled_miss);
+  check_order(6, HOC_NODES_WARP_BLEND, 0.25, 60, &hidden, &sampled_miss);
   CHECK(hidden > 0);
+  printf("%d folds that only the exact test finds (the sampled tangle test passes them)\n",
+         sampled_miss);
+  CHECK(sampled_miss > 0);
   /* a straight element is not folded; p = 1 never is (sigma linear on an edge) */
   const hoc_quality_tables *t;
   CHECK_OK(hoc_quality_tables_get(4, HOC_NODES_EQUISPACED, &t));

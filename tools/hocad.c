@@ -243,11 +243,12 @@ static const char *usage_mesh =
     "  --measure M          shape | oddy (default shape)\n"
     "  --linear M.msh       start from this linear mesh of MODEL instead of meshing\n"
     "  --no-optimize        stop after raising the order\n"
-    "  --refinements N      if elements stay tangled, mesh their faces again with\n"
-    "                       edges half as long (and, without --size-min, a minimum\n"
-    "                       size ten times smaller) and start again, at most N\n"
-    "                       times (default 2), then split them as 'hocad optimize'\n"
-    "                       does, N times per chain (with --linear only the\n"
+    "  --refinements N      if elements stay tangled, split them as 'hocad optimize'\n"
+    "                       does (kept if that leaves none tangled), else mesh\n"
+    "                       their faces again with edges half as long (and,\n"
+    "                       without --size-min, a minimum size ten times smaller)\n"
+    "                       and start again, at most N times (default 2), then\n"
+    "                       split, N times per chain (with --linear only the\n"
     "                       splits, default 3)\n" OPTIMIZE_OPTIONS
     "  -o, --output F.msh   gmsh MSH 4.1 output (default: MODEL-NAME_pP.msh here;\n"
     "                       orders above 10 have no MSH type: use --vtu)\n"
@@ -436,6 +437,7 @@ typedef struct stage {
   int stopped_at_limit; /* the optimiser ran out of sweeps with elements tangled */
   int best_iteration;   /* when the returned mesh's tangled count was first reached */
   int second_attempt;   /* first sweep of the optimiser's second attempt, or 0 */
+  int exact_phase;      /* first sweep of its exact phase, or 0 */
   double objective_initial, objective;
 } stage;
 
@@ -446,7 +448,8 @@ typedef struct report {
   double model_seconds; /* reading the CAD model */
   size_t nodes;         /* of the final mesh */
   int refinements;      /* times tangled elements were meshed again finer (mesh: their
-                           faces, then split; optimize and mesh --linear: split) */
+                           faces, or split; optimize and mesh --linear: split) */
+  int remeshings;       /* of those, mesh's remeshings of faces */
 } report;
 
 static void print_table(const report *r) {
@@ -532,16 +535,18 @@ static int write_json(const char *path, const options *o, const report *r, const
              i ? "," : "", s->name, s->stats.order, s->stats.elements, s->stats.min, s->stats.max,
              s->stats.mean, s->stats.std, s->stats.tangled, s->seconds, s->stats.seconds);
     if (s->optimized)
-      text_add(&t, ", \"iterations\": %d, \"converged\": %s, \"best_iteration\": %d, "
-                   "\"second_attempt\": %d, \"objective_initial\": %.17g, \"objective\": %.17g",
-               s->iterations, s->converged ? "true" : "false", s->best_iteration,
-               s->second_attempt, s->objective_initial, s->objective);
+      text_add(&t,
+               ", \"iterations\": %d, \"converged\": %s, \"best_iteration\": %d, "
+               "\"second_attempt\": %d, \"exact_phase\": %d, \"objective_initial\": %.17g, "
+               "\"objective\": %.17g",
+               s->iterations, s->converged ? "true" : "false", s->best_iteration, s->second_attempt,
+               s->exact_phase, s->objective_initial, s->objective);
     text_add(&t, "}");
   }
   text_add(&t,
-           "\n  ],\n  \"refinements\": %d,\n  \"nodes\": %zu,\n  \"model_seconds\": %.6f,\n  "
-           "\"write_seconds\": %.6f\n}\n",
-           r->refinements, r->nodes, r->model_seconds, r->write_seconds);
+           "\n  ],\n  \"refinements\": %d,\n  \"remeshings\": %d,\n  \"nodes\": %zu,\n  "
+           "\"model_seconds\": %.6f,\n  \"write_seconds\": %.6f\n}\n",
+           r->refinements, r->remeshings, r->nodes, r->model_seconds, r->write_seconds);
   if (t.failed) {
     free(t.s);
     error_line("out of memory writing the report");
@@ -639,6 +644,7 @@ static int optimize_stage(const options *o, report *r, hoc_mesh *mesh) {
   s->stopped_at_limit = res.stopped_at_limit;
   s->best_iteration = res.best_iteration;
   s->second_attempt = res.second_attempt;
+  s->exact_phase = res.exact_phase;
   s->objective_initial = res.objective_initial;
   s->objective = res.objective_final;
   return EXIT_OK;
@@ -861,8 +867,9 @@ static void drop_mesh(hoc_mesh **m, hoc_mesh *const *keep, int n) {
  * has no tangled element. *mesh and *r become the result with the fewest
  * tangled elements (the earlier on a tie); r->refinements goes on counting
  * with every split made; the split results' reports keep r's first n_keep
- * stages. */
-static int refine_tangled(const options *o, report *r, int n_keep, hoc_mesh **mesh) {
+ * stages. A trial prints no closing note (its caller decides what it
+ * keeps). */
+static int refine_tangled(const options *o, report *r, int n_keep, hoc_mesh **mesh, int trial) {
   static const hoc_split_kind kinds[2] = {HOC_SPLIT_RED_GREEN, HOC_SPLIT_LONGEST_EDGE};
   hoc_mesh *base = *mesh, *best = base, *cur[2] = {base, base};
   report best_r = *r, chain_r[2] = {*r, *r};
@@ -894,14 +901,47 @@ static int refine_tangled(const options *o, report *r, int n_keep, hoc_mesh **me
   *mesh = best;
   *r = best_r;
   r->refinements = made;
-  if (!code && !o->quiet && improved)
+  if (!code && !o->quiet && !trial && improved)
     fprintf(stderr,
             "%s: note: kept the mesh of refinement %d of %d, which has the fewest tangled "
             "elements\n",
             program, best_r.refinements, made);
-  else if (!code && !o->quiet)
+  else if (!code && !o->quiet && !trial)
     fprintf(stderr, "%s: note: splitting left no fewer tangled elements: kept the mesh before it\n",
             program);
+  return code;
+}
+
+/* refine_tangled on a copy of *ho: if that leaves no element tangled, *ho
+ * and *r become its result and *done is 1; otherwise both stay as they
+ * were. */
+static int try_split_first(const options *o, report *r, hoc_mesh **ho, int *done) {
+  *done = 0;
+  hoc_mesh *copy = NULL;
+  hoc_status st = hoc_mesh_convert(*ho, o->nodes, &copy);
+  if (st != HOC_OK) return fail(st, 0);
+  report trial = *r;
+  if (!o->quiet)
+    fprintf(stderr, "%s: splitting the tangled elements first (kept if that leaves none tangled)\n",
+            program);
+  int code = refine_tangled(o, &trial, 2, &copy, 1);
+  size_t left = code ? 0 : trial.stages[trial.n - 1].stats.tangled;
+  if (!code && !left) {
+    if (!o->quiet)
+      fprintf(stderr, "%s: note: kept the mesh of refinement %d, which has no tangled element\n",
+              program, trial.refinements);
+    hoc_mesh_destroy(ho);
+    *ho = copy;
+    *r = trial;
+    *done = 1;
+    return EXIT_OK;
+  }
+  hoc_mesh_destroy(&copy);
+  r->refinements = trial.refinements; /* made, though not kept */
+  if (!code && !o->quiet)
+    fprintf(stderr,
+            "%s: note: splitting left %zu tangled at best: meshing the faces again instead\n",
+            program, left);
   return code;
 }
 
@@ -922,14 +962,15 @@ static int refine_faces(const options *o, report *r, const hoc_model *model, con
     return fail(st, 0);
   }
   r->refinements++;
+  r->remeshings++;
   if (!o->quiet) {
     size_t total = 0;
     for (size_t e = 0; e < ne; ++e)
       total += tangled[e];
     fprintf(stderr,
             "%s: %zu element(s) still tangled; meshing their faces again with edges half "
-            "as long (refinement %d of at most %d): faces",
-            program, total, r->refinements, o->refinements);
+            "as long (remeshing %d of at most %d, refinement %d): faces",
+            program, total, r->remeshings, o->refinements, r->refinements);
     print_faces(ho, tangled);
   }
   free(tangled);
@@ -1067,21 +1108,32 @@ static int cmd_mesh(int argc, char **argv) {
      * start; in a given linear mesh, or once the remeshing is spent, the
      * elements split as `optimize` splits them */
     if (!o.optimize || o.order < 2 || !r.stages[r.n - 1].stats.tangled || o.refinements < 1) break;
-    if (o.linear || r.refinements >= o.refinements) {
+    if (o.linear || r.remeshings >= o.refinements) {
       size_t now_tangled = r.stages[r.n - 1].stats.tangled;
       if (kept_ho && kept_r.stages[kept_r.n - 1].stats.tangled < now_tangled) {
-        int made = r.refinements;
+        int made = r.refinements, remade = r.remeshings;
         if (!o.quiet)
           fprintf(stderr,
                   "%s: note: the last mesh has more tangled elements (%zu) than the one after "
                   "%d remeshing(s) (%zu): going on from that one\n",
-                  program, now_tangled, kept_r.refinements,
+                  program, now_tangled, kept_r.remeshings,
                   kept_r.stages[kept_r.n - 1].stats.tangled);
         move_meshes(attempt, kept);
         r = kept_r;
         r.refinements = made;
+        r.remeshings = remade;
       }
-      if ((code = refine_tangled(&o, &r, 2, &ho))) goto done;
+      if ((code = refine_tangled(&o, &r, 2, &ho, 0))) goto done;
+      final = ho;
+      break;
+    }
+    /* first the local repair, on a copy: splitting the tangled elements
+     * (as below, once remeshing is spent) keeps the rest of the mesh; it
+     * is kept if it leaves none tangled (the bottle at order 2: two
+     * elements at its thread's end, which two remeshings only make worse) */
+    int split_code = 0;
+    if ((code = try_split_first(&o, &r, &ho, &split_code))) goto done;
+    if (split_code) {
       final = ho;
       break;
     }
@@ -1316,7 +1368,7 @@ static int cmd_optimize(int argc, char **argv) {
   if ((code = measure_stage(&o, &r, "input", mesh, now() - t0, NULL))) goto done;
   if ((code = optimize_starts(&o, &r, &mesh))) goto done;
   if (r.stages[r.n - 1].stats.tangled && o.refinements > 0 &&
-      (code = refine_tangled(&o, &r, 1, &mesh)))
+      (code = refine_tangled(&o, &r, 1, &mesh, 0)))
     goto done;
   if (!o.quiet) {
     printf("mesh %s on %s: %zu nodes\n", o.mesh_in, o.model, hoc_mesh_num_nodes(mesh));

@@ -204,6 +204,11 @@ static int walk_next(point_walk *w, double *a1, double *a2, double *nq) {
 
 double hoc_element_quality(const hoc_quality_tables *t, hoc_measure measure, const double *x,
                            const double *n, double *eta_out, double *min_sigma) {
+  return hoc_element_quality_test(t, measure, x, n, 1, eta_out, min_sigma);
+}
+
+double hoc_element_quality_test(const hoc_quality_tables *t, hoc_measure measure, const double *x,
+                                const double *n, int exact, double *eta_out, double *min_sigma) {
   double sum[HOC_QB], smin[HOC_QB], bad[HOC_QB];
   int oddy = measure == HOC_MEASURE_ODDY;
 #ifdef HOC_HAVE_AVX2_KERNEL
@@ -219,6 +224,9 @@ double hoc_element_quality(const hoc_quality_tables *t, hoc_measure measure, con
     tangled |= bad[l] != 0;
     if (!(smin[l] >= mn)) mn = smin[l];
   }
+  /* a fold between the samples (exact tests; most elements pass their
+   * first check, all Bernstein coefficients positive) */
+  if (!tangled && exact) tangled = hoc_element_folded(t, x, n);
   double eta = tangled ? INFINITY : sqrt(total);
   if (eta_out) *eta_out = eta;
   if (min_sigma) *min_sigma = mn;
@@ -270,28 +278,33 @@ double hoc_element_residuals_node(const hoc_quality_tables *t, hoc_measure measu
   return smin;
 }
 
-double hoc_element_node_residuals(const hoc_quality_tables *t, hoc_measure measure,
-                                  const double *x, const double *n, double delta, double *r,
-                                  double *J) {
-  int np = t->np, nv = t->nv;
-  double smin = INFINITY, sw = sqrt(1.0 / (np + nv)), a1[3], a2[3], nj[3];
+int hoc_element_node_points(const hoc_quality_tables *t, int dense) {
+  return t->np + t->nlat + (dense ? t->nv - t->nlat - t->nvpad : 0);
+}
+
+double hoc_element_node_residuals(const hoc_quality_tables *t, hoc_measure measure, const double *x,
+                                  const double *n, double delta, int dense, double *r, double *J) {
+  int np = t->np, lat_end = np + t->nlat, pad_end = lat_end + t->nvpad;
+  double smin = INFINITY, sw = sqrt(1.0 / hoc_element_node_points(t, dense)), a1[3], a2[3], nj[3];
   point_walk w;
-  walk_begin(&w, t, x, n, t->nq, t->nq + np + nv);
-  for (int k; (k = walk_next(&w, a1, a2, nj)) >= 0;) {
+  walk_begin(&w, t, x, n, t->nq, t->nq + np + (dense ? t->nv : t->nlat));
+  for (int k, c = 0; (k = walk_next(&w, a1, a2, nj)) >= 0;) {
     int j = k - t->nq;
+    if (j >= lat_end && j < pad_end) continue; /* the padding's copies */
     double sig, g1[3], g2[3];
     const double *G = j < np ? t->Gn + 2 * (size_t)j * np : t->Gv + 2 * (size_t)(j - np) * np;
     double e = hoc_distortion_point(measure, a1, a2, nj, delta, &sig, J ? g1 : NULL,
                                     J ? g2 : NULL);
     double rel = sig / (dot(a1, a1) + dot(a2, a2));
     if (!(rel >= smin)) smin = rel;
-    r[j] = sw * (e - 1);
+    r[c] = sw * (e - 1);
     if (J) {
-      double *Jj = J + 3 * (size_t)j * np;
+      double *Jj = J + 3 * (size_t)c * np;
       for (int i = 0; i < np; ++i)
-        for (int c = 0; c < 3; ++c)
-          Jj[3 * i + c] = sw * (g1[c] * G[2 * i] + g2[c] * G[2 * i + 1]);
+        for (int d = 0; d < 3; ++d)
+          Jj[3 * i + d] = sw * (g1[d] * G[2 * i] + g2[d] * G[2 * i + 1]);
     }
+    ++c;
   }
   return smin;
 }
@@ -309,10 +322,13 @@ static int points_tangled(const hoc_quality_tables *t, const double *x, const do
   return 0;
 }
 
-int hoc_element_tangled(const hoc_quality_tables *t, const double *x, const double *n) {
-  return points_tangled(t, x, n, 0, t->nq + t->np + t->nv);
+int hoc_element_tangled(const hoc_quality_tables *t, const double *x, const double *n, int exact) {
+  return points_tangled(t, x, n, 0, t->n_check_blocks * HOC_QB) ||
+         (exact && hoc_element_folded(t, x, n));
 }
 
-int hoc_element_nodes_tangled(const hoc_quality_tables *t, const double *x, const double *n) {
-  return points_tangled(t, x, n, t->nq, t->nq + t->np + t->nv);
+int hoc_element_nodes_tangled(const hoc_quality_tables *t, const double *x, const double *n,
+                              int exact) {
+  return points_tangled(t, x, n, t->nq, t->n_check_blocks * HOC_QB) ||
+         (exact && hoc_element_folded(t, x, n));
 }

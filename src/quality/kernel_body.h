@@ -33,7 +33,7 @@ KATTR static void KNAME(const hoc_quality_tables *t, int oddy, const double *x, 
   const int np = t->np;
   for (int h = 0; h < HOC_QB; h += KW) {
     KV sum = KSPLAT(0), smin = KSPLAT(INFINITY), bad = KSPLAT(0);
-    for (int b = 0; b < t->n_blocks; ++b) {
+    for (int b = 0; b < t->n_check_blocks; ++b) {
       size_t off = (size_t)b * (size_t)np * HOC_QB + (size_t)h;
       const double *bx = t->Bx + off, *by = t->By + off, *bn = t->Bn + off;
       KFRAME_SUMS(bx, by, bn);

@@ -34,7 +34,12 @@ typedef struct hoc_quality_tables {
   double *G;  /* [nq][np][2] grad_{x~} N_i = W^{-T} grad_xi N_i at the quadrature points */
   double *Gn; /* [np][np][2] the same at the nodes (row j: node j) */
   double *rs; /* [np][2] reference coordinates of the nodes */
-  int nv;     /* validation points: the equispaced lattice of order 2p */
+  int nv;     /* validation points: the equispaced lattice of order 2p (the first
+               * nlat), nvpad copies of its last point (so that the points
+               * after it start a block), then HOC_EDGE_REFINE - 1 more points
+               * between two of its points on each edge (dense residuals only:
+               * the exact edge test decides the edges) */
+  int nlat, nvpad;
   double *Nv; /* [nv][np] basis values there (for the interpolated normal) */
   double *Gv; /* [nv][np][2] ideal-space gradients there */
   /* All nq + np + nv points again, for measuring: in blocks of HOC_QB
@@ -42,6 +47,7 @@ typedef struct hoc_quality_tables {
    * node the HOC_QB values side by side, so that the kernel works on HOC_QB
    * points at once. Normals at node points interpolate with the identity. */
   int n_blocks;
+  int n_check_blocks; /* the blocks up to the lattice's last point: the tangle test's samples */
   double *Bx, *By; /* [n_blocks][np][HOC_QB] ideal-space gradients */
   double *Bn;      /* [n_blocks][np][HOC_QB] basis values (normal interpolation) */
   double *Bw;      /* [n_blocks][HOC_QB] weights: w at quadrature points, else 0 */
@@ -54,9 +60,12 @@ typedef struct hoc_quality_tables {
   double *Cn; /* [p + 1][p + 1] values at the edge's nodes -> Bernstein coefficients, degree p */
   double *Wb; /* [p][p][p + 1] C(p-1, i) C(p-1, j) C(p, k) / C(3p-2, i+j+k) */
   int *enode; /* [3][p + 1] local nodes along each edge, from corner k to corner k + 1 */
+  /* The exact fold test of the whole triangle (interior.c), for p >= 2 */
+  double *Cb; /* [np][np] node values -> Bernstein coefficients of degree p on the triangle */
+  double *Mb; /* multinomials |a|! / (a0! a1! a2!) of the degrees p - 1, 2p - 2, p, 3p - 2 */
 } hoc_quality_tables;
 
-enum { HOC_QB = 4 };
+enum { HOC_QB = 4, HOC_EDGE_REFINE = 4 };
 
 /** Quadrature degree used for order p (see docs/quality.md for why). */
 int hoc_quality_degree(int p);
@@ -96,7 +105,10 @@ double hoc_distortion_point(hoc_measure measure, const double a1[3], const doubl
 struct hoc_lagrange;
 hoc_status hoc_quality_edge_tables(hoc_quality_tables *t, const struct hoc_lagrange *basis);
 
-/** Quality of one element (Definition 2 with delta = 0).
+/** Quality of one element (Definition 2 with delta = 0). Tangled (q = 0)
+ *  if sigma <= 0 at a quadrature point, a node or a point of the
+ *  validation lattice, or if the exact edge test finds a fold between them
+ *  (hoc_element_edges_folded).
  *  @param[in] x  [np][3] node positions
  *  @param[in] n  [np][3] unit CAD normals at the nodes (oriented)
  *  @param[out] eta  element distortion (+inf if tangled)
@@ -105,6 +117,11 @@ hoc_status hoc_quality_edge_tables(hoc_quality_tables *t, const struct hoc_lagra
  *  @return q = 1/eta, 0 if tangled */
 double hoc_element_quality(const hoc_quality_tables *t, hoc_measure measure, const double *x,
                            const double *n, double *eta, double *min_sigma);
+
+/** hoc_element_quality with the exact edge test only if `exact` (the
+ *  optimiser's first phase checks the samples alone: see optimize.c). */
+double hoc_element_quality_test(const hoc_quality_tables *t, hoc_measure measure, const double *x,
+                                const double *n, int exact, double *eta, double *min_sigma);
 
 /** Vector width of hoc_element_quality: 0 the widest the CPU runs (the
  *  default), 2 (SSE2) or 4 (AVX2, where the CPU has it). For tests; not
@@ -130,19 +147,25 @@ double hoc_element_residuals_node(const hoc_quality_tables *t, hoc_measure measu
                                   double *r, double *Jk);
 
 /** Residuals at the element's nodes and validation points,
- *  r_j = sqrt(1/(np+nv)) (eta(point j) - 1), for untangling: the tangle test
+ *  r_j = sqrt(1/count) (eta(point j) - 1), for untangling: the tangle test
  *  also asks det > 0 there, which the quadrature points alone do not see.
- *  @param[out] r  [np + nv]
- *  @param[out] J  [np + nv][np][3] d r_j / d x_i, or NULL
+ *  The points: the nodes and the order-2p lattice, and if `dense` the
+ *  edge points between the lattice's too (count:
+ *  hoc_element_node_points).
+ *  @param[out] r  [count]
+ *  @param[out] J  [count][np][3] d r_j / d x_i, or NULL
  *  @return smallest sigma / |D phi|^2 over those points */
-double hoc_element_node_residuals(const hoc_quality_tables *t, hoc_measure measure,
-                                  const double *x, const double *n, double delta, double *r,
-                                  double *J);
+double hoc_element_node_residuals(const hoc_quality_tables *t, hoc_measure measure, const double *x,
+                                  const double *n, double delta, int dense, double *r, double *J);
+
+/** Number of residuals of hoc_element_node_residuals. */
+int hoc_element_node_points(const hoc_quality_tables *t, int dense);
 
 /** Tangled test of Definition 2 (delta = 0): 1 if sigma <= 0 at a
- *  quadrature point, a node or a validation point. Same test as
+ *  quadrature point, a node or a validation point, or (if `exact`) the
+ *  exact edge test finds a fold. With exact = 1 the same test as
  *  hoc_element_quality. */
-int hoc_element_tangled(const hoc_quality_tables *t, const double *x, const double *n);
+int hoc_element_tangled(const hoc_quality_tables *t, const double *x, const double *n, int exact);
 
 /** Exact fold test of the element's edges: 1 if sigma is clearly negative
  *  somewhere on an edge, found by Bernstein coefficients of (a1 x a2) . n
@@ -151,14 +174,30 @@ int hoc_element_tangled(const hoc_quality_tables *t, const double *x, const doub
  *  (sigma is then linear along an edge). Sampled tests miss such folds:
  *  an optimiser that only checks samples can walk nodes until a fold lies
  *  between them (seen on edges next to slivers and at corners on curves).
- *  Not yet part of hoc_element_tangled or of measuring: see
- *  docs/quality.md, "Folds between the samples". */
+ *  Part of measuring (hoc_element_quality): see docs/quality.md, "Folds
+ *  between the samples". */
 int hoc_element_edges_folded(const hoc_quality_tables *t, const double *x, const double *n);
 
-/** The rest of that test: 1 if sigma <= 0 at a node or at a point of the
- *  validation lattice (the order-2p equispaced points), so that no fold can
- *  hide between quadrature points. (The residual functions return the
- *  quadrature half as their smallest sigma.) */
-int hoc_element_nodes_tangled(const hoc_quality_tables *t, const double *x, const double *n);
+/** Fill the tables of the whole-triangle test (Cb, Mb) of t (nothing for
+ *  p = 1). */
+hoc_status hoc_quality_interior_tables(hoc_quality_tables *t);
+
+/** Exact fold test of the whole element: 1 if sigma is clearly negative
+ *  somewhere on the triangle, found by the Bernstein coefficients of
+ *  (x_r x x_s) . n (degree 3p - 2 on the triangle) and cuts in four down
+ *  to 1/32 of the edges; 0 if proven positive or nothing negative found.
+ *  (The edge test goes deeper along the edges, where folds between the
+ *  samples were seen.) 0 for p = 1. */
+int hoc_element_interior_folded(const hoc_quality_tables *t, const double *x, const double *n);
+
+/** The exact tests together: edges, then the whole triangle. */
+int hoc_element_folded(const hoc_quality_tables *t, const double *x, const double *n);
+
+/** The rest of the tangle test, given the quadrature points' smallest
+ *  sigma (the residual functions return it): 1 if sigma <= 0 at a node or
+ *  at a point of the validation lattice, or (if `exact`) the exact edge
+ *  test finds a fold. */
+int hoc_element_nodes_tangled(const hoc_quality_tables *t, const double *x, const double *n,
+                              int exact);
 
 #endif

@@ -36,6 +36,8 @@ static void tables_free(hoc_quality_tables *t) {
   free(t->Cn);
   free(t->Wb);
   free(t->enode);
+  free(t->Cb);
+  free(t->Mb);
   free(t);
 }
 
@@ -80,10 +82,17 @@ static hoc_status build(int p, hoc_nodeset set, int degree, hoc_quality_tables *
   HOC_TRY_GOTO(hoc_lagrange_eval(basis, t->np, t->rs, NULL, dN), fail);
   to_ideal(np * np, dN, t->Gn);
   HOC_TRY_GOTO(hoc_quality_edge_tables(t, basis), fail);
+  HOC_TRY_GOTO(hoc_quality_interior_tables(t), fail);
   {
-    /* validation lattice: (i, j) / 2p */
+    /* validation points: the lattice (i, j) / 2p (the tangle test's),
+     * copies of its last point up to the end of a block of HOC_QB points,
+     * then on each edge the points k / 8p between the lattice's (residuals
+     * that see an edge pinched between the lattice's points; the exact
+     * edge test decides such folds) */
     int m = 2 * p;
-    t->nv = (m + 1) * (m + 2) / 2;
+    t->nlat = (m + 1) * (m + 2) / 2;
+    t->nvpad = (HOC_QB - (t->nq + t->np + t->nlat) % HOC_QB) % HOC_QB;
+    t->nv = t->nlat + t->nvpad + 3 * m * (HOC_EDGE_REFINE - 1);
     size_t nv = (size_t)t->nv;
     double *pts = hoc_calloc(2 * nv, sizeof *pts), *dv = hoc_calloc(2 * nv * np, sizeof *dv);
     t->Nv = hoc_calloc(nv * np, sizeof *t->Nv);
@@ -97,6 +106,17 @@ static hoc_status build(int p, hoc_nodeset set, int degree, hoc_quality_tables *
     size_t k = 0;
     for (int i = 0; i <= m; ++i)
       for (int j = 0; i + j <= m; ++j, ++k) pts[2 * k] = (double)i / m, pts[2 * k + 1] = (double)j / m;
+    for (int i = 0; i < t->nvpad; ++i, ++k)
+      pts[2 * k] = 1, pts[2 * k + 1] = 0;
+    static const double corner[4][2] = {{0, 0}, {1, 0}, {0, 1}, {0, 0}};
+    for (int e = 0; e < 3; ++e)
+      for (int i = 0; i < m * HOC_EDGE_REFINE; ++i) {
+        if (i % HOC_EDGE_REFINE == 0) continue;
+        double s = (double)i / (m * HOC_EDGE_REFINE);
+        for (int d = 0; d < 2; ++d)
+          pts[2 * k + d] = (1 - s) * corner[e][d] + s * corner[e + 1][d];
+        ++k;
+      }
     status = hoc_lagrange_eval(basis, t->nv, pts, t->Nv, dv);
     if (status == HOC_OK) to_ideal(nv * np, dv, t->Gv);
     free(pts);
@@ -107,6 +127,7 @@ static hoc_status build(int p, hoc_nodeset set, int degree, hoc_quality_tables *
     /* the blocked copy: quadrature points, nodes, lattice */
     int total = t->nq + t->np + t->nv;
     t->n_blocks = (total + HOC_QB - 1) / HOC_QB;
+    t->n_check_blocks = (t->nq + t->np + t->nlat + t->nvpad) / HOC_QB;
     size_t nb = (size_t)t->n_blocks;
     HOC_ALLOC_GOTO(t->Bx, nb * np * HOC_QB, fail);
     HOC_ALLOC_GOTO(t->By, nb * np * HOC_QB, fail);

@@ -1,0 +1,262 @@
+/* Exact fold test of a whole curved triangle: the sign of
+ * sigma = (x_r x x_s) . n over the reference triangle from the Bernstein
+ * coefficients of that polynomial, with subdivision in four.
+ * SPDX-License-Identifier: GPL-2.0-or-later
+ *
+ * x is a polynomial of degree p, so its derivatives x_r, x_s are of degree
+ * p - 1 and the interpolated normal n of degree p: (x_r x x_s) . n is of
+ * degree 3p - 2. Its sign is that of sigma = (a1 x a2) . n (a1, a2 are x_r,
+ * x_s times W^-1, whose determinant is positive). In the Bernstein basis of
+ * degree m on the triangle (barycentric l0 = 1 - r - s, l1 = r, l2 = s),
+ *   d/dr sum_a b_a B_a^m = m sum_c (b_{c+e1} - b_{c+e0}) B_c^{m-1},
+ *   B_a^i B_c^j = [C(a) C(c) / C(a + c)] B_{a+c}^{i+j}
+ * with C(a) = |a|! / (a0! a1! a2!); the coefficients at the three corners
+ * are the values there. All coefficients positive proves sigma > 0 on the
+ * triangle; a corner value below -tol proves a fold; otherwise the triangle
+ * is cut in four at its edges' midpoints (the children's coefficients of x
+ * and n by blossoming) and each child decided the same way. */
+#include "basis/basis.h"
+#include "quality/quality.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+enum {
+  MAXP = HOC_MAX_ORDER,
+  NET_P = (MAXP + 1) * (MAXP + 2) / 2,     /* a net of degree p */
+  NET_2 = (2 * MAXP - 1) * (2 * MAXP) / 2, /* degree 2p - 2 */
+  NET_3 = (3 * MAXP - 1) * (3 * MAXP) / 2, /* degree 3p - 2 */
+  MAX_LEVELS = 5                           /* children down to 1/32 of the edges */
+};
+
+/* Index of the coefficient (m - j - k, j, k) in a net of degree m. */
+static inline int ix(int m, int j, int k) { return k * (m + 1) - k * (k - 1) / 2 + j; }
+
+static double factorial(int n) {
+  double f = 1;
+  for (int i = 2; i <= n; ++i)
+    f *= i;
+  return f;
+}
+
+/* C(a) of every multi-index of degree m, in net order. */
+static void multinomials(int m, double *c) {
+  for (int k = 0; k <= m; ++k)
+    for (int j = 0; j + k <= m; ++j)
+      c[ix(m, j, k)] = factorial(m) / (factorial(m - j - k) * factorial(j) * factorial(k));
+}
+
+hoc_status hoc_quality_interior_tables(hoc_quality_tables *t) {
+  int p = t->p, np = t->np;
+  if (p < 2) return HOC_OK;
+  size_t n = (size_t)np;
+  int m1 = p - 1, m2 = 2 * p - 2, m3 = 3 * p - 2;
+  size_t n1 = (size_t)ix(m1, 0, m1 + 1), n2 = (size_t)ix(m2, 0, m2 + 1),
+         n3 = (size_t)ix(m3, 0, m3 + 1);
+  HOC_ALLOC(t->Cb, n * n);
+  HOC_ALLOC(t->Mb, n1 + n2 + n + n3);
+  multinomials(m1, t->Mb);
+  multinomials(m2, t->Mb + n1);
+  multinomials(p, t->Mb + n1 + n2);
+  multinomials(m3, t->Mb + n1 + n2 + n);
+  const double *cm = t->Mb + n1 + n2;
+  double *a = hoc_calloc(2 * n * n, sizeof *a);
+  if (!a) return HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
+  /* [V | I] with V[node][coefficient] = B_a^p(node), then Gauss-Jordan */
+  for (size_t r = 0; r < n; ++r) {
+    double l1 = t->rs[2 * r], l2 = t->rs[2 * r + 1], l0 = 1 - l1 - l2;
+    for (int k = 0; k <= p; ++k)
+      for (int j = 0; j + k <= p; ++j)
+        a[r * 2 * n + (size_t)ix(p, j, k)] =
+            cm[ix(p, j, k)] * pow(l0, p - j - k) * pow(l1, j) * pow(l2, k);
+    a[r * 2 * n + n + r] = 1;
+  }
+  hoc_status status = HOC_OK;
+  for (size_t c = 0; c < n && status == HOC_OK; ++c) {
+    size_t piv = c;
+    for (size_t r = c + 1; r < n; ++r)
+      if (fabs(a[r * 2 * n + c]) > fabs(a[piv * 2 * n + c])) piv = r;
+    if (!(fabs(a[piv * 2 * n + c]) > 0)) {
+      status = HOC_ERROR(HOC_ERR_INTERNAL, "singular Bernstein matrix of order %d", p);
+      break;
+    }
+    for (size_t k = 0; k < 2 * n; ++k) {
+      double tmp = a[c * 2 * n + k];
+      a[c * 2 * n + k] = a[piv * 2 * n + k];
+      a[piv * 2 * n + k] = tmp;
+    }
+    double d = a[c * 2 * n + c];
+    for (size_t k = 0; k < 2 * n; ++k)
+      a[c * 2 * n + k] /= d;
+    for (size_t r = 0; r < n; ++r) {
+      double f = a[r * 2 * n + c];
+      if (r != c && f != 0)
+        for (size_t k = 0; k < 2 * n; ++k)
+          a[r * 2 * n + k] -= f * a[c * 2 * n + k];
+    }
+  }
+  /* rows of V^-1: coefficient a = sum over nodes of Cb[a][node] x_node */
+  for (size_t r = 0; r < n && status == HOC_OK; ++r)
+    for (size_t c = 0; c < n; ++c)
+      t->Cb[r * n + c] = a[r * 2 * n + n + c];
+  free(a);
+  return status;
+}
+
+/* The multinomials of the four degrees the test uses. */
+typedef struct weights {
+  int p;
+  const double *c1, *c2, *cp, *c3; /* degrees p - 1, 2p - 2, p, 3p - 2 */
+} weights;
+
+/* One de Casteljau step of a net of 3-vectors of degree m at the point w
+ * (barycentric): out, of degree m - 1. */
+static void step(int m, const double *in, const double w[3], double *out) {
+  for (int k = 0; k < m; ++k)
+    for (int j = 0; j + k < m; ++j) {
+      const double *a0 = in + 3 * ix(m, j, k), *a1 = in + 3 * ix(m, j + 1, k),
+                   *a2 = in + 3 * ix(m, j, k + 1);
+      double *o = out + 3 * ix(m - 1, j, k);
+      for (int d = 0; d < 3; ++d)
+        o[d] = w[0] * a0[d] + w[1] * a1[d] + w[2] * a2[d];
+    }
+}
+
+/* The net of degree m on the child triangle with corners W[0..2]
+ * (barycentric in the parent): coefficient (a0, a1, a2) is the blossom
+ * at W0 a0 times, W1 a1 times, W2 a2 times. */
+static void restrict_net(int m, const double *in, const double W[3][3], double *out) {
+  double buf[4][NET_P * 3];
+  const double *n2 = in;
+  int b2 = 0;
+  for (int k = 0; k <= m; ++k) {
+    if (k) {
+      step(m - k + 1, n2, W[2], buf[b2]);
+      n2 = buf[b2];
+      b2 ^= 1;
+    }
+    const double *n1 = n2;
+    int b1 = 2;
+    for (int j = 0; j + k <= m; ++j) {
+      if (j) {
+        step(m - k - j + 1, n1, W[1], buf[b1]);
+        n1 = buf[b1];
+        b1 ^= 1; /* 2 <-> 3 */
+      }
+      /* W0 down to one coefficient, in place (each step reads only
+       * coefficients it has not yet overwritten) */
+      int deg = m - k - j;
+      double v[3 * (MAXP + 1) * (MAXP + 2) / 2];
+      memcpy(v, n1, (size_t)(3 * ix(deg, 0, deg + 1)) * sizeof *v);
+      for (int i = deg; i > 0; --i)
+        step(i, v, W[0], v);
+      memcpy(out + 3 * ix(m, j, k), v, 3 * sizeof *v);
+    }
+  }
+}
+
+/* Coefficients P[ix(3p-2, ., .)] of (x_r x x_s) . n from the nets of x and
+ * n (degree p); returns the largest magnitude of a term. */
+static double sigma_net(const weights *wt, const double *bx, const double *bn, double *P) {
+  int p = wt->p, m1 = p - 1, m2 = 2 * p - 2, m3 = 3 * p - 2;
+  double d1[NET_P * 3], d2[NET_P * 3], c[NET_2 * 3];
+  for (int k = 0; k <= m1; ++k)
+    for (int j = 0; j + k <= m1; ++j) {
+      const double *b0 = bx + 3 * ix(p, j, k), *b1 = bx + 3 * ix(p, j + 1, k),
+                   *b2 = bx + 3 * ix(p, j, k + 1);
+      for (int d = 0; d < 3; ++d) {
+        d1[3 * ix(m1, j, k) + d] = p * (b1[d] - b0[d]);
+        d2[3 * ix(m1, j, k) + d] = p * (b2[d] - b0[d]);
+      }
+    }
+  memset(c, 0, (size_t)(3 * ix(m2, 0, m2 + 1)) * sizeof *c);
+  for (int k1 = 0; k1 <= m1; ++k1)
+    for (int j1 = 0; j1 + k1 <= m1; ++j1) {
+      const double *f = d1 + 3 * ix(m1, j1, k1);
+      double cf = wt->c1[ix(m1, j1, k1)];
+      for (int k2 = 0; k2 <= m1; ++k2)
+        for (int j2 = 0; j2 + k2 <= m1; ++j2) {
+          const double *g = d2 + 3 * ix(m1, j2, k2);
+          int o = ix(m2, j1 + j2, k1 + k2);
+          double w = cf * wt->c1[ix(m1, j2, k2)] / wt->c2[o];
+          c[3 * o] += w * (f[1] * g[2] - f[2] * g[1]);
+          c[3 * o + 1] += w * (f[2] * g[0] - f[0] * g[2]);
+          c[3 * o + 2] += w * (f[0] * g[1] - f[1] * g[0]);
+        }
+    }
+  memset(P, 0, (size_t)ix(m3, 0, m3 + 1) * sizeof *P);
+  double scale = 0;
+  for (int k1 = 0; k1 <= m2; ++k1)
+    for (int j1 = 0; j1 + k1 <= m2; ++j1) {
+      const double *f = c + 3 * ix(m2, j1, k1);
+      double cf = wt->c2[ix(m2, j1, k1)];
+      for (int k2 = 0; k2 <= p; ++k2)
+        for (int j2 = 0; j2 + k2 <= p; ++j2) {
+          const double *g = bn + 3 * ix(p, j2, k2);
+          int o = ix(m3, j1 + j2, k1 + k2);
+          double v =
+              cf * wt->cp[ix(p, j2, k2)] / wt->c3[o] * (f[0] * g[0] + f[1] * g[1] + f[2] * g[2]);
+          P[o] += v;
+          if (fabs(v) > scale || v != v) scale = fabs(v);
+        }
+    }
+  return scale;
+}
+
+/* 1 if a fold is found on the triangle of nets bx, bn (levels more cuts
+ * allowed), 0 if proven positive or nothing found. */
+static int folded_net(const weights *wt, const double *bx, const double *bn, int levels) {
+  int m3 = 3 * wt->p - 2, nc = ix(m3, 0, m3 + 1);
+  double P[NET_3];
+  double scale = sigma_net(wt, bx, bn, P);
+  if (!(scale > 0) || !isfinite(scale)) return 1; /* degenerate or not a number */
+  double tol = 1e-10 * scale;
+  if (P[ix(m3, 0, 0)] < -tol || P[ix(m3, m3, 0)] < -tol || P[ix(m3, 0, m3)] < -tol) return 1;
+  int positive = 1;
+  for (int i = 0; i < nc && positive; ++i)
+    positive = P[i] > 0;
+  if (positive || levels == 0) return 0;
+  /* the four children: the corners' triangles and the middle one (its
+   * corners ordered so that it turns the same way) */
+  static const double kids[4][3][3] = {
+      {{1, 0, 0}, {0.5, 0.5, 0}, {0.5, 0, 0.5}},
+      {{0.5, 0.5, 0}, {0, 1, 0}, {0, 0.5, 0.5}},
+      {{0.5, 0, 0.5}, {0, 0.5, 0.5}, {0, 0, 1}},
+      {{0, 0.5, 0.5}, {0.5, 0, 0.5}, {0.5, 0.5, 0}},
+  };
+  double cx[NET_P * 3], cn[NET_P * 3];
+  for (int q = 0; q < 4; ++q) {
+    restrict_net(wt->p, bx, kids[q], cx);
+    restrict_net(wt->p, bn, kids[q], cn);
+    if (folded_net(wt, cx, cn, levels - 1)) return 1;
+  }
+  return 0;
+}
+
+int hoc_element_interior_folded(const hoc_quality_tables *t, const double *x, const double *n) {
+  int p = t->p, np = t->np;
+  if (p < 2 || !t->Cb) return 0;
+  int m1 = p - 1, m2 = 2 * p - 2;
+  weights wt = {p, t->Mb, NULL, NULL, NULL};
+  wt.c2 = wt.c1 + ix(m1, 0, m1 + 1);
+  wt.cp = wt.c2 + ix(m2, 0, m2 + 1);
+  wt.c3 = wt.cp + np;
+  double bx[NET_P * 3], bn[NET_P * 3];
+  for (int a = 0; a < np; ++a) {
+    const double *row = t->Cb + (size_t)a * (size_t)np;
+    double sx[3] = {0, 0, 0}, sn[3] = {0, 0, 0};
+    for (int i = 0; i < np; ++i)
+      for (int d = 0; d < 3; ++d) {
+        sx[d] += row[i] * x[3 * i + d];
+        sn[d] += row[i] * n[3 * i + d];
+      }
+    memcpy(bx + 3 * a, sx, sizeof sx);
+    memcpy(bn + 3 * a, sn, sizeof sn);
+  }
+  return folded_net(&wt, bx, bn, MAX_LEVELS);
+}
+
+int hoc_element_folded(const hoc_quality_tables *t, const double *x, const double *n) {
+  return hoc_element_edges_folded(t, x, n) || hoc_element_interior_folded(t, x, n);
+}
