@@ -6,6 +6,7 @@
  * why the exact test exists. SPDX-License-Identifier: GPL-2.0-or-later */
 #include "basis/basis.h"
 #include "quality/quality.h"
+#include "test_sigma.h"
 #include "test_util.h"
 
 #include <string.h>
@@ -56,24 +57,7 @@ static int edge_points_make(const hoc_lagrange *b, int np, int m, edge_points *e
 
 /* smallest sigma / |D phi|^2 over the edge points */
 static double edges_min(const edge_points *e, const double *x, const double *n) {
-  double mn = INFINITY;
-  int np = e->np;
-  for (size_t q = 0; q < 3 * (size_t)(e->m + 1); ++q) {
-    const double *N = e->N + q * (size_t)np, *dN = e->dN + 2 * q * (size_t)np;
-    double a1[3] = {0, 0, 0}, a2[3] = {0, 0, 0}, nn[3] = {0, 0, 0};
-    for (int i = 0; i < np; ++i)
-      for (int c = 0; c < 3; ++c) {
-        a1[c] += dN[2 * i] * x[3 * i + c];
-        a2[c] += dN[2 * i + 1] * x[3 * i + c];
-        nn[c] += N[i] * n[3 * i + c];
-      }
-    double cr[3] = {a1[1] * a2[2] - a1[2] * a2[1], a1[2] * a2[0] - a1[0] * a2[2],
-                    a1[0] * a2[1] - a1[1] * a2[0]};
-    double f = a1[0] * a1[0] + a1[1] * a1[1] + a1[2] * a1[2] + a2[0] * a2[0] + a2[1] * a2[1] +
-               a2[2] * a2[2];
-    mn = fmin(mn, (cr[0] * nn[0] + cr[1] * nn[1] + cr[2] * nn[2]) / f);
-  }
-  return mn;
+  return sigma_min_points(3 * (size_t)(e->m + 1), e->np, e->N, e->dN, x, n);
 }
 
 static void check_order(int p, hoc_nodeset set, double amplitude, int trials, int *hidden_total,
@@ -148,23 +132,6 @@ int main(void) {
   printf("%d folds that only the exact test finds (the sampled tangle test passes them)\n",
          sampled_miss);
   CHECK(sampled_miss > 0);
-  /* a straight element is not folded; p = 1 never is (sigma linear on an edge) */
-  const hoc_quality_tables *t;
-  CHECK_OK(hoc_quality_tables_get(4, HOC_NODES_EQUISPACED, &t));
-  double x[15 * 3], n[15 * 3];
-  for (int i = 0; i < t->np; ++i) {
-    x[3 * i] = t->rs[2 * i], x[3 * i + 1] = t->rs[2 * i + 1], x[3 * i + 2] = 0;
-    n[3 * i] = 0, n[3 * i + 1] = 0, n[3 * i + 2] = 1;
-  }
-  CHECK(hoc_element_edges_folded(t, x, n) == 0);
-  for (int i = 0; i < t->np; ++i)
-    n[3 * i + 2] = -1; /* seen from below: negative everywhere */
-  CHECK(hoc_element_edges_folded(t, x, n) == 1);
-  /* collapsed to a point, or not a number: folded, not a long search */
-  for (int i = 0; i < 3 * t->np; ++i)
-    x[i] = 0;
-  CHECK(hoc_element_edges_folded(t, x, n) == 1);
-  x[4] = NAN;
-  CHECK(hoc_element_edges_folded(t, x, n) == 1);
+  check_fixed_cases(hoc_element_edges_folded);
   return test_report();
 }

@@ -8,6 +8,7 @@
  * SPDX-License-Identifier: GPL-2.0-or-later */
 #include "basis/basis.h"
 #include "quality/quality.h"
+#include "test_sigma.h"
 #include "test_util.h"
 
 #include <string.h>
@@ -29,29 +30,6 @@ static void surface(double x, double y, double *X, double *n) {
 }
 
 enum { M = 96, NPTS = (M + 1) * (M + 2) / 2 };
-
-/* smallest sigma / |D phi|^2 over the lattice of order M (reference
- * gradients: sigma's sign is the same as in ideal coordinates) */
-static double lattice_min(int np, const double *N, const double *dN, const double *x,
-                          const double *n) {
-  double mn = INFINITY;
-  for (size_t q = 0; q < NPTS; ++q) {
-    const double *Nq = N + q * (size_t)np, *dq = dN + 2 * q * (size_t)np;
-    double a1[3] = {0, 0, 0}, a2[3] = {0, 0, 0}, nn[3] = {0, 0, 0};
-    for (int i = 0; i < np; ++i)
-      for (int c = 0; c < 3; ++c) {
-        a1[c] += dq[2 * i] * x[3 * i + c];
-        a2[c] += dq[2 * i + 1] * x[3 * i + c];
-        nn[c] += Nq[i] * n[3 * i + c];
-      }
-    double cr[3] = {a1[1] * a2[2] - a1[2] * a2[1], a1[2] * a2[0] - a1[0] * a2[2],
-                    a1[0] * a2[1] - a1[1] * a2[0]};
-    double f = a1[0] * a1[0] + a1[1] * a1[1] + a1[2] * a1[2] + a2[0] * a2[0] + a2[1] * a2[1] +
-               a2[2] * a2[2];
-    mn = fmin(mn, (cr[0] * nn[0] + cr[1] * nn[1] + cr[2] * nn[2]) / f);
-  }
-  return mn;
-}
 
 static void check_order(int p, hoc_nodeset set, double amplitude, int trials, int *inside) {
   const hoc_quality_tables *t;
@@ -82,7 +60,7 @@ static void check_order(int p, hoc_nodeset set, double amplitude, int trials, in
       surface(u - 0.3, v - 0.2, x + 3 * i, n + 3 * i);
     }
     int exact = hoc_element_interior_folded(t, x, n);
-    double mn = lattice_min(np, N, dN, x, n);
+    double mn = sigma_min_points(NPTS, np, N, dN, x, n);
     if (mn < -1e-6) {
       /* the edges' own test goes deeper along them (a fold narrower than
        * the whole-triangle test's 1/32 next to an edge is theirs) */
@@ -123,23 +101,7 @@ int main(void) {
   check_order(4, HOC_NODES_FEKETE, 0.45, 100, &inside);
   check_order(6, HOC_NODES_WARP_BLEND, 0.25, 60, &inside);
   CHECK(inside > 0);
-  /* straight: not folded; seen from below: folded; collapsed or not a
-   * number: folded */
-  const hoc_quality_tables *t;
-  CHECK_OK(hoc_quality_tables_get(4, HOC_NODES_EQUISPACED, &t));
-  double x[15 * 3], n[15 * 3];
-  for (int i = 0; i < t->np; ++i) {
-    x[3 * i] = t->rs[2 * i], x[3 * i + 1] = t->rs[2 * i + 1], x[3 * i + 2] = 0;
-    n[3 * i] = 0, n[3 * i + 1] = 0, n[3 * i + 2] = 1;
-  }
-  CHECK(hoc_element_interior_folded(t, x, n) == 0);
-  for (int i = 0; i < t->np; ++i)
-    n[3 * i + 2] = -1;
-  CHECK(hoc_element_interior_folded(t, x, n) == 1);
-  for (int i = 0; i < 3 * t->np; ++i)
-    x[i] = 0;
-  CHECK(hoc_element_interior_folded(t, x, n) == 1);
-  x[4] = NAN;
-  CHECK(hoc_element_interior_folded(t, x, n) == 1);
+  check_fixed_cases(hoc_element_interior_folded);
+  check_fixed_cases(hoc_element_folded);
   return test_report();
 }

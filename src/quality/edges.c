@@ -21,46 +21,55 @@ static double bernstein(int m, int i, double s) {
   return binomial(m, i) * pow(s, i) * pow(1 - s, m - i);
 }
 
-/* inv = V^{-1} for V[r][c] = B_c^m(s_r), r, c = 0..m (Gauss-Jordan with
- * partial pivoting). */
-static hoc_status bernstein_inverse(int m, const double *s, double *inv) {
-  int n = m + 1;
-  double *a = hoc_calloc((size_t)(n * 2 * n), sizeof *a);
+hoc_status hoc_quality_invert(int n, const double *V, double *inv) {
+  size_t w = 2 * (size_t)n;
+  double *a = hoc_calloc((size_t)n * w, sizeof *a);
   if (!a) return HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
   for (int r = 0; r < n; ++r) {
-    for (int c = 0; c < n; ++c)
-      a[r * 2 * n + c] = bernstein(m, c, s[r]);
-    a[r * 2 * n + n + r] = 1;
+    memcpy(a + (size_t)r * w, V + (size_t)r * (size_t)n, (size_t)n * sizeof *a);
+    a[(size_t)r * w + (size_t)(n + r)] = 1;
   }
   for (int c = 0; c < n; ++c) {
     int piv = c;
     for (int r = c + 1; r < n; ++r)
-      if (fabs(a[r * 2 * n + c]) > fabs(a[piv * 2 * n + c])) piv = r;
-    if (!(fabs(a[piv * 2 * n + c]) > 0)) {
+      if (fabs(a[(size_t)r * w + (size_t)c]) > fabs(a[(size_t)piv * w + (size_t)c])) piv = r;
+    if (!(fabs(a[(size_t)piv * w + (size_t)c]) > 0)) {
       free(a);
-      return HOC_ERROR(HOC_ERR_INTERNAL, "singular Bernstein matrix of degree %d", m);
+      return HOC_ERROR(HOC_ERR_INTERNAL, "singular %d x %d Bernstein matrix", n, n);
     }
-    for (int k = 0; k < 2 * n; ++k) {
-      double tmp = a[c * 2 * n + k];
-      a[c * 2 * n + k] = a[piv * 2 * n + k];
-      a[piv * 2 * n + k] = tmp;
+    double *rc = a + (size_t)c * w, *rp = a + (size_t)piv * w;
+    for (size_t k = 0; k < w; ++k) {
+      double tmp = rc[k];
+      rc[k] = rp[k];
+      rp[k] = tmp;
     }
-    double d = a[c * 2 * n + c];
-    for (int k = 0; k < 2 * n; ++k)
-      a[c * 2 * n + k] /= d;
+    double d = rc[c];
+    for (size_t k = 0; k < w; ++k)
+      rc[k] /= d;
     for (int r = 0; r < n; ++r) {
-      if (r == c) continue;
-      double f = a[r * 2 * n + c];
-      if (f != 0)
-        for (int k = 0; k < 2 * n; ++k)
-          a[r * 2 * n + k] -= f * a[c * 2 * n + k];
+      double *rr = a + (size_t)r * w, f = rr[c];
+      if (r != c && f != 0)
+        for (size_t k = 0; k < w; ++k)
+          rr[k] -= f * rc[k];
     }
   }
   for (int r = 0; r < n; ++r)
-    for (int c = 0; c < n; ++c)
-      inv[r * n + c] = a[r * 2 * n + n + c];
+    memcpy(inv + (size_t)r * (size_t)n, a + (size_t)r * w + n, (size_t)n * sizeof *inv);
   free(a);
   return HOC_OK;
+}
+
+/* inv = V^{-1} for V[r][c] = B_c^m(s_r), r, c = 0..m. */
+static hoc_status bernstein_inverse(int m, const double *s, double *inv) {
+  int n = m + 1;
+  double *V = hoc_calloc((size_t)(n * n), sizeof *V);
+  if (!V) return HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
+  for (int r = 0; r < n; ++r)
+    for (int c = 0; c < n; ++c)
+      V[r * n + c] = bernstein(m, c, s[r]);
+  hoc_status status = hoc_quality_invert(n, V, inv);
+  free(V);
+  return status;
 }
 
 /* Reference coordinates rs[2] of the point at s of edge k (corner k at

@@ -61,46 +61,19 @@ hoc_status hoc_quality_interior_tables(hoc_quality_tables *t) {
   multinomials(p, t->Mb + n1 + n2);
   multinomials(m3, t->Mb + n1 + n2 + n);
   const double *cm = t->Mb + n1 + n2;
-  double *a = hoc_calloc(2 * n * n, sizeof *a);
-  if (!a) return HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
-  /* [V | I] with V[node][coefficient] = B_a^p(node), then Gauss-Jordan */
+  /* V[node][coefficient] = B_a^p(node); Cb = V^-1 (row a: coefficient a
+   * as a sum over the nodes) */
+  double *V = hoc_calloc(n * n, sizeof *V);
+  if (!V) return HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
   for (size_t r = 0; r < n; ++r) {
     double l1 = t->rs[2 * r], l2 = t->rs[2 * r + 1], l0 = 1 - l1 - l2;
     for (int k = 0; k <= p; ++k)
       for (int j = 0; j + k <= p; ++j)
-        a[r * 2 * n + (size_t)ix(p, j, k)] =
+        V[r * n + (size_t)ix(p, j, k)] =
             cm[ix(p, j, k)] * pow(l0, p - j - k) * pow(l1, j) * pow(l2, k);
-    a[r * 2 * n + n + r] = 1;
   }
-  hoc_status status = HOC_OK;
-  for (size_t c = 0; c < n && status == HOC_OK; ++c) {
-    size_t piv = c;
-    for (size_t r = c + 1; r < n; ++r)
-      if (fabs(a[r * 2 * n + c]) > fabs(a[piv * 2 * n + c])) piv = r;
-    if (!(fabs(a[piv * 2 * n + c]) > 0)) {
-      status = HOC_ERROR(HOC_ERR_INTERNAL, "singular Bernstein matrix of order %d", p);
-      break;
-    }
-    for (size_t k = 0; k < 2 * n; ++k) {
-      double tmp = a[c * 2 * n + k];
-      a[c * 2 * n + k] = a[piv * 2 * n + k];
-      a[piv * 2 * n + k] = tmp;
-    }
-    double d = a[c * 2 * n + c];
-    for (size_t k = 0; k < 2 * n; ++k)
-      a[c * 2 * n + k] /= d;
-    for (size_t r = 0; r < n; ++r) {
-      double f = a[r * 2 * n + c];
-      if (r != c && f != 0)
-        for (size_t k = 0; k < 2 * n; ++k)
-          a[r * 2 * n + k] -= f * a[c * 2 * n + k];
-    }
-  }
-  /* rows of V^-1: coefficient a = sum over nodes of Cb[a][node] x_node */
-  for (size_t r = 0; r < n && status == HOC_OK; ++r)
-    for (size_t c = 0; c < n; ++c)
-      t->Cb[r * n + c] = a[r * 2 * n + n + c];
-  free(a);
+  hoc_status status = hoc_quality_invert(np, V, t->Cb);
+  free(V);
   return status;
 }
 

@@ -178,6 +178,10 @@ int hoc_element_tangled(const hoc_quality_tables *t, const double *x, const doub
  *  between the samples". */
 int hoc_element_edges_folded(const hoc_quality_tables *t, const double *x, const double *n);
 
+/** inv[n][n] = V^-1 by Gauss-Jordan with partial pivoting (the Bernstein
+ *  matrices of the exact tests). */
+hoc_status hoc_quality_invert(int n, const double *V, double *inv);
+
 /** Fill the tables of the whole-triangle test (Cb, Mb) of t (nothing for
  *  p = 1). */
 hoc_status hoc_quality_interior_tables(hoc_quality_tables *t);
