@@ -190,7 +190,8 @@ static int walk_next(point_walk *w, double *a1, double *a2, double *nq) {
   if (w->k >= w->last) return -1;
   if (w->k >= w->b1 * HOC_QB || w->k < w->b0 * HOC_QB) {
     w->b0 = w->k / HOC_QB;
-    w->b1 = w->b0 + FRAME_BLOCKS < w->t->n_blocks ? w->b0 + FRAME_BLOCKS : w->t->n_blocks;
+    int end = (w->last + HOC_QB - 1) / HOC_QB; /* no frames past the last point asked */
+    w->b1 = w->b0 + FRAME_BLOCKS < end ? w->b0 + FRAME_BLOCKS : end;
     frames(w->t, w->b0, w->b1, w->x, w->n, w->fr);
   }
   size_t st = (size_t)(w->b1 - w->b0) * HOC_QB, j = (size_t)(w->k - w->b0 * HOC_QB);
