@@ -10,7 +10,8 @@
 #   BENCH_THREADS default 2
 # Each run is `hocad mesh MODEL --order P --no-output` at hocad's default
 # sizes. Columns: iterations and seconds of the last optimisation, ref the
-# times faces were meshed again finer (each a whole new run), wall_s the
+# refinements made (the JSON's `refinements`: splits, tried or kept, and
+# remeshings of faces, each of those a whole new run), wall_s the
 # whole run; bounds checks 0 tangled, min q >= 0.9 x linear min q and mean
 # q >= linear mean q - 0.02 ("ok", or what failed), against the linear mesh
 # of the last attempt.

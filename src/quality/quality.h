@@ -174,8 +174,8 @@ int hoc_element_tangled(const hoc_quality_tables *t, const double *x, const doub
  *  (sigma is then linear along an edge). Sampled tests miss such folds:
  *  an optimiser that only checks samples can walk nodes until a fold lies
  *  between them (seen on edges next to slivers and at corners on curves).
- *  Part of measuring (hoc_element_quality): see docs/quality.md, "Folds
- *  between the samples". */
+ *  Part of measuring (hoc_element_quality): see docs/quality.md,
+ *  "Tangled elements: samples, then exact tests". */
 int hoc_element_edges_folded(const hoc_quality_tables *t, const double *x, const double *n);
 
 /** inv[n][n] = V^-1 by Gauss-Jordan with partial pivoting (the Bernstein
