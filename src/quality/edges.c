@@ -72,9 +72,7 @@ static hoc_status bernstein_inverse(int m, const double *s, double *inv) {
   return status;
 }
 
-/* Reference coordinates rs[2] of the point at s of edge k (corner k at
- * s = 0, corner k + 1 at s = 1). */
-static void edge_point(int k, double s, double *rs) {
+void hoc_quality_edge_point(int k, double s, double *rs) {
   const double r[3][2] = {{s, 0}, {1 - s, s}, {0, 1 - s}};
   rs[0] = r[k][0];
   rs[1] = r[k][1];
@@ -116,7 +114,7 @@ hoc_status hoc_quality_edge_tables(hoc_quality_tables *t, const hoc_lagrange *ba
     sa[j] = (j + 0.5) / p;
   for (int k = 0; k < 3; ++k) {
     for (int j = 0; j < p; ++j)
-      edge_point(k, sa[j], pts + 2 * j);
+      hoc_quality_edge_point(k, sa[j], pts + 2 * j);
     HOC_TRY_GOTO(hoc_lagrange_eval(basis, p, pts, NULL, dN), done);
     const double inv_sqrt3 = 0.57735026918962576451; /* to ideal space, as tables.c */
     double *G = t->Ge + (size_t)k * (size_t)p * np2;

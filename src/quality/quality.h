@@ -178,6 +178,10 @@ int hoc_element_tangled(const hoc_quality_tables *t, const double *x, const doub
  *  "Tangled elements: samples, then exact tests". */
 int hoc_element_edges_folded(const hoc_quality_tables *t, const double *x, const double *n);
 
+/** Reference coordinates rs[2] of the point at s of edge k (corner k at
+ *  s = 0, corner k + 1 at s = 1). */
+void hoc_quality_edge_point(int k, double s, double *rs);
+
 /** inv[n][n] = V^-1 by Gauss-Jordan with partial pivoting (the Bernstein
  *  matrices of the exact tests). */
 hoc_status hoc_quality_invert(int n, const double *V, double *inv);

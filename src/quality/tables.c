@@ -108,15 +108,10 @@ static hoc_status build(int p, hoc_nodeset set, int degree, hoc_quality_tables *
       for (int j = 0; i + j <= m; ++j, ++k) pts[2 * k] = (double)i / m, pts[2 * k + 1] = (double)j / m;
     for (int i = 0; i < t->nvpad; ++i, ++k)
       pts[2 * k] = 1, pts[2 * k + 1] = 0;
-    static const double corner[4][2] = {{0, 0}, {1, 0}, {0, 1}, {0, 0}};
     for (int e = 0; e < 3; ++e)
-      for (int i = 0; i < m * HOC_EDGE_REFINE; ++i) {
-        if (i % HOC_EDGE_REFINE == 0) continue;
-        double s = (double)i / (m * HOC_EDGE_REFINE);
-        for (int d = 0; d < 2; ++d)
-          pts[2 * k + d] = (1 - s) * corner[e][d] + s * corner[e + 1][d];
-        ++k;
-      }
+      for (int i = 0; i < m * HOC_EDGE_REFINE; ++i)
+        if (i % HOC_EDGE_REFINE)
+          hoc_quality_edge_point(e, (double)i / (m * HOC_EDGE_REFINE), pts + 2 * k++);
     status = hoc_lagrange_eval(basis, t->nv, pts, t->Nv, dv);
     if (status == HOC_OK) to_ideal(nv * np, dv, t->Gv);
     free(pts);
