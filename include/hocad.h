@@ -153,6 +153,11 @@ hoc_status hoc_mesh_elevate(const hoc_mesh *mesh, int order, hoc_nodeset nodeset
  *  @param[out] out  new mesh of the same order */
 hoc_status hoc_mesh_convert(const hoc_mesh *mesh, hoc_nodeset nodeset, hoc_mesh **out);
 
+/** An exact copy of a mesh (same nodes, parameters and elements, bit for
+ *  bit), on the same model.
+ *  @param[out] out  the copy (destroy it with hoc_mesh_destroy) */
+hoc_status hoc_mesh_copy(const hoc_mesh *mesh, hoc_mesh **out);
+
 /** Read a gmsh MSH 4.1 mesh (ASCII or binary) of the model's surfaces,
  *  e.g. one written by gmsh or by hoc_mesh_write_msh. Triangles of any order
  *  up to 10 are read; other elements are ignored. Nodes without parametric

@@ -346,7 +346,58 @@ out:
   hoc_model_destroy(&model);
 }
 
+/* Arrays a and b of n items of `size` bytes are the same, bit for bit,
+ * and not the same memory (a NULL pair counts as the same). */
+static int same_copy(const void *a, const void *b, size_t n, size_t size) {
+  if (!a || !b) return a == b;
+  return a != b && !memcmp(a, b, n * size);
+}
+
+/* hoc_mesh_copy: every array the same bit for bit, in memory of its own. */
+static void test_copy(void) {
+  hoc_model *model;
+  CHECK_OK(hoc_cad_create_analytic(HOC_ANALYTIC_SPHERE, 1, 0, &model));
+  if (!model) return;
+  hoc_mesh *lin = NULL, *m = NULL, *c = NULL;
+  CHECK_OK(hoc_mesh_grid_linear(model, 12, 6, &lin));
+  CHECK_OK(hoc_mesh_elevate(lin, 4, HOC_NODES_FEKETE, &m));
+  CHECK_STATUS(hoc_mesh_copy(NULL, &c), HOC_ERR_ARGUMENT);
+  CHECK_STATUS(hoc_mesh_copy(m, NULL), HOC_ERR_ARGUMENT);
+  CHECK_OK(hoc_mesh_copy(m, &c));
+  if (m && c) {
+    size_t nn = m->n_nodes, ne = m->n_elems, np = (size_t)m->np, ns = m->n_slots;
+    CHECK(c->model == m->model && c->order == 4 && c->nodeset == HOC_NODES_FEKETE);
+    CHECK(c->n_nodes == nn && c->n_elems == ne && c->n_slots == ns && c->n_lines == m->n_lines);
+    CHECK(same_copy(c->xyz, m->xyz, 3 * nn, sizeof *m->xyz));
+    CHECK(same_copy(c->param, m->param, 2 * nn, sizeof *m->param));
+    CHECK(same_copy(c->dim, m->dim, nn, sizeof *m->dim));
+    CHECK(same_copy(c->entity, m->entity, nn, sizeof *m->entity));
+    CHECK(same_copy(c->conn, m->conn, ne * np, sizeof *m->conn));
+    CHECK(same_copy(c->elem_face, m->elem_face, ne, sizeof *m->elem_face));
+    CHECK(same_copy(c->elem_uv, m->elem_uv, 2 * ne * np, sizeof *m->elem_uv));
+    CHECK(same_copy(c->elem_slot, m->elem_slot, ne * np, sizeof *m->elem_slot));
+    CHECK(same_copy(c->slot_node, m->slot_node, ns, sizeof *m->slot_node));
+    CHECK(same_copy(c->slot_uv, m->slot_uv, 2 * ns, sizeof *m->slot_uv));
+    CHECK(same_copy(c->slot_pole, m->slot_pole, ns, sizeof *m->slot_pole));
+    CHECK(same_copy(c->face_orient, m->face_orient, (size_t)model->n_faces,
+                    sizeof *m->face_orient));
+    /* the sphere's poles: slots marked, and the copy measures the same */
+    size_t poles = 0;
+    for (size_t i = 0; i < ns; ++i) poles += c->slot_pole[i] != 0;
+    CHECK(poles > 0);
+    hoc_quality_stats a, b;
+    CHECK_OK(hoc_mesh_measure(m, HOC_MEASURE_SHAPE, NULL, NULL, &a));
+    CHECK_OK(hoc_mesh_measure(c, HOC_MEASURE_SHAPE, NULL, NULL, &b));
+    CHECK(a.min == b.min && a.mean == b.mean && a.tangled == b.tangled);
+  }
+  hoc_mesh_destroy(&c);
+  hoc_mesh_destroy(&m);
+  hoc_mesh_destroy(&lin);
+  hoc_model_destroy(&model);
+}
+
 int main(void) {
+  test_copy();
   test_split(HOC_SPLIT_RED_GREEN);
   test_split(HOC_SPLIT_LONGEST_EDGE);
   test_topology_detection();

@@ -918,7 +918,7 @@ static int refine_tangled(const options *o, report *r, int n_keep, hoc_mesh **me
 static int try_split_first(const options *o, report *r, hoc_mesh **ho, int *done) {
   *done = 0;
   hoc_mesh *copy = NULL;
-  hoc_status st = hoc_mesh_convert(*ho, o->nodes, &copy);
+  hoc_status st = hoc_mesh_copy(*ho, &copy);
   if (st != HOC_OK) return fail(st, 0);
   report trial = *r;
   if (!o->quiet)

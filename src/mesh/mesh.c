@@ -40,6 +40,55 @@ hoc_status hoc_mesh_alloc(hoc_model *model, int order, size_t n_nodes, size_t n_
   return HOC_OK;
 }
 
+/* *dst = a copy of n items of `size` bytes at src (NULL stays NULL);
+ * returns 0 when out of memory. */
+static int dup_array(void *dst, const void *src, size_t n, size_t size) {
+  void **d = dst;
+  *d = NULL;
+  if (!src) return 1;
+  *d = hoc_calloc(n ? n : 1, size);
+  if (!*d) return 0;
+  memcpy(*d, src, n * size);
+  return 1;
+}
+
+hoc_status hoc_mesh_copy(const hoc_mesh *mesh, hoc_mesh **out) {
+  HOC_CHECK(out, HOC_ERR_ARGUMENT, "mesh output is NULL");
+  *out = NULL;
+  HOC_CHECK(mesh, HOC_ERR_ARGUMENT, "no mesh given");
+  const hoc_mesh *s = mesh;
+  hoc_mesh *m;
+  HOC_ALLOC(m, 1);
+  *m = *s;
+  size_t np = (size_t)s->np, nf = (size_t)s->model->n_faces;
+  int ok = dup_array(&m->xyz, s->xyz, 3 * s->n_nodes, sizeof *s->xyz) &
+           dup_array(&m->param, s->param, 2 * s->n_nodes, sizeof *s->param) &
+           dup_array(&m->dim, s->dim, s->n_nodes, sizeof *s->dim) &
+           dup_array(&m->entity, s->entity, s->n_nodes, sizeof *s->entity) &
+           dup_array(&m->conn, s->conn, s->n_elems * np, sizeof *s->conn) &
+           dup_array(&m->elem_face, s->elem_face, s->n_elems, sizeof *s->elem_face) &
+           dup_array(&m->elem_uv, s->elem_uv, 2 * s->n_elems * np, sizeof *s->elem_uv) &
+           dup_array(&m->elem_slot, s->elem_slot, s->n_elems * np, sizeof *s->elem_slot) &
+           dup_array(&m->slot_node, s->slot_node, s->n_slots, sizeof *s->slot_node) &
+           dup_array(&m->slot_face, s->slot_face, s->n_slots, sizeof *s->slot_face) &
+           dup_array(&m->slot_uv, s->slot_uv, 2 * s->n_slots, sizeof *s->slot_uv) &
+           dup_array(&m->slot_pole, s->slot_pole, s->n_slots, sizeof *s->slot_pole) &
+           dup_array(&m->line_conn, s->line_conn, s->n_lines * ((size_t)s->order + 1),
+                     sizeof *s->line_conn) &
+           dup_array(&m->line_curve, s->line_curve, s->n_lines, sizeof *s->line_curve) &
+           dup_array(&m->line_t, s->line_t, 2 * s->n_lines, sizeof *s->line_t) &
+           dup_array(&m->face_orient, s->face_orient, nf, sizeof *s->face_orient) &
+           dup_array(&m->failed_faces, s->failed_faces, (size_t)s->n_failed_faces,
+                     sizeof *s->failed_faces);
+  if (!ok) {
+    hoc_mesh_destroy(&m);
+    return HOC_ERROR(HOC_ERR_MEMORY, "out of memory for a copy of a mesh of %zu nodes",
+                     mesh->n_nodes);
+  }
+  *out = m;
+  return HOC_OK;
+}
+
 void hoc_mesh_destroy(hoc_mesh **mesh) {
   if (!mesh || !*mesh) return;
   hoc_mesh *m = *mesh;

@@ -106,6 +106,8 @@ typedef struct opt {
   double *delta;        /* [n_elems] regularisation of the sweep */
   unsigned char *valid; /* [n_elems] not tangled (Definition 2) */
   unsigned char *pvalid;/* [n_elems] not folded in the (u,v) plane */
+  unsigned char *xvalid;/* [n_elems] first phase: valid by the exact test too (a step may not
+                           fold it between samples; one folded there already may stay so) */
   unsigned char *on_boundary; /* [n_elems] has a node on a CAD curve or vertex: kept unfolded in
                            (u,v) so no node leaves the trimmed face (inside, 3D validity of
                            the neighbours is the barrier) */
@@ -157,7 +159,8 @@ static void opt_free(opt *o) {
                o->pvalid,    o->on_boundary, o->region,  o->was_region, o->dirty,    o->delta_own,
                o->fe,        o->qe,          o->hsize,   o->active,     o->moving,   o->step,
                o->alpha,     o->f0,          o->fnew,    o->slope,      o->state,    o->list,
-               o->committed, o->tpar,        o->txyz,    o->tdz,        o->tslot_uv, o->tnormal};
+               o->committed, o->tpar,        o->txyz,    o->tdz,        o->tslot_uv, o->tnormal,
+               o->xvalid};
   for (size_t i = 0; i < sizeof p / sizeof *p; ++i) free(p[i]);
 }
 
@@ -506,6 +509,7 @@ static hoc_status setup(opt *o, hoc_mesh *m, hoc_measure measure, int fix_curves
   HOC_ALLOC(o->normal, 3 * m->n_slots + 3);
   HOC_ALLOC(o->delta, ne);
   HOC_ALLOC(o->valid, ne);
+  HOC_ALLOC(o->xvalid, ne);
   HOC_ALLOC(o->pvalid, ne);
   HOC_ALLOC(o->on_boundary, ne);
   for (size_t e = 0; e < ne; ++e)
@@ -722,6 +726,7 @@ static hoc_status sweep_start(opt *o, double *objective, double *min_q, size_t *
       double eta;
       qe[e] = hoc_element_quality_test(o->t, o->measure, x, n, o->exact, &eta, NULL);
       o->valid[e] = qe[e] > 0;
+      o->xvalid[e] = o->valid[e] && (o->exact || !hoc_element_folded(o->t, x, n));
       o->pvalid[e] = (unsigned char)param_valid(o, e, uv);
       o->delta_own[e] = 0;
       if (!o->valid[e]) {
@@ -1160,7 +1165,7 @@ static int block_trial_flagged(const opt *o, size_t b, scratch *s, double fmax, 
     size_t e = o->B->be_elem[a];
     if (!o->valid[e] || relaxed(o, e)) continue;
     gather(o, e, s->x, s->n);
-    if (hoc_element_nodes_tangled(o->t, s->x, s->n, o->exact)) return 0;
+    if (hoc_element_nodes_tangled(o->t, s->x, s->n, o->exact || o->xvalid[e])) return 0;
   }
   return 1;
 }
@@ -1377,9 +1382,10 @@ static hoc_status do_color(opt *o, int color, scratch *scr, int nthreads, size_t
     scratch *s = &scr[omp_get_thread_num()];
     for (size_t c = o->B->be_start[b]; c < o->B->be_start[b + 1]; ++c) {
       size_t e = o->B->be_elem[c];
-      if (!o->valid[e]) {
+      if (!o->valid[e] || !o->xvalid[e]) {
         gather(o, e, s->x, s->n);
-        o->valid[e] = (unsigned char)!hoc_element_tangled(o->t, s->x, s->n, o->exact);
+        if (!o->valid[e]) o->valid[e] = (unsigned char)!hoc_element_tangled(o->t, s->x, s->n, o->exact);
+        o->xvalid[e] = o->valid[e] && (o->exact || !hoc_element_folded(o->t, s->x, s->n));
       }
       if (!o->pvalid[e]) o->pvalid[e] = (unsigned char)param_valid(o, e, s->uv);
     }
