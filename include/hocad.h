@@ -332,6 +332,10 @@ typedef struct hoc_optimize_result {
   int exact_phase;      /**< first sweep of the exact phase: sweeps after the samples
                              said untangled but the exact edge test found folds between
                              them (0: none was needed) */
+  int protected_run;    /**< first sweep of the kept run when it is a second run from the start
+                             in which steps may not fold an element between samples that the
+                             exact test finds valid (made when the first left elements
+                             tangled; 0: the first run is kept) */
   int stopped_at_limit; /**< elements were still tangled when the last attempt had used all
                              its sweeps (not ended early by the 40-sweep stall rule or by
                              every node sleeping) */

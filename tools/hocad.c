@@ -438,6 +438,7 @@ typedef struct stage {
   int best_iteration;   /* when the returned mesh's tangled count was first reached */
   int second_attempt;   /* first sweep of the optimiser's second attempt, or 0 */
   int exact_phase;      /* first sweep of its exact phase, or 0 */
+  int protected_run;    /* first sweep of the kept protected run, or 0 */
   double objective_initial, objective;
 } stage;
 
@@ -537,10 +538,11 @@ static int write_json(const char *path, const options *o, const report *r, const
     if (s->optimized)
       text_add(&t,
                ", \"iterations\": %d, \"converged\": %s, \"best_iteration\": %d, "
-               "\"second_attempt\": %d, \"exact_phase\": %d, \"objective_initial\": %.17g, "
+               "\"second_attempt\": %d, \"exact_phase\": %d, \"protected_run\": %d, "
+               "\"objective_initial\": %.17g, "
                "\"objective\": %.17g",
                s->iterations, s->converged ? "true" : "false", s->best_iteration, s->second_attempt,
-               s->exact_phase, s->objective_initial, s->objective);
+               s->exact_phase, s->protected_run, s->objective_initial, s->objective);
     text_add(&t, "}");
   }
   text_add(&t,
@@ -645,6 +647,7 @@ static int optimize_stage(const options *o, report *r, hoc_mesh *mesh) {
   s->best_iteration = res.best_iteration;
   s->second_attempt = res.second_attempt;
   s->exact_phase = res.exact_phase;
+  s->protected_run = res.protected_run;
   s->objective_initial = res.objective_initial;
   s->objective = res.objective_final;
   return EXIT_OK;
