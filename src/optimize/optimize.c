@@ -1740,7 +1740,7 @@ hoc_status hoc_mesh_optimize(hoc_mesh *mesh, const hoc_optimize_options *options
    * folds on its way to better meshes (t20 at order 5: min q 0.49, 0.12
    * protected), but on gmsh's coarse meshes its folds between samples
    * outrun the exact phase (gmsh 5.0's order-3 bottle: 11 left, 7
-   * protected, and 0 after one split). */
+   * protected, and 0 after four splits). */
   if (status == HOC_OK && a.tangled_final && !limited) {
     status = snapshot_take(&first, mesh, a.tangled_final, a.objective_final);
     if (status == HOC_OK) {
@@ -1752,9 +1752,9 @@ hoc_status hoc_mesh_optimize(hoc_mesh *mesh, const hoc_optimize_options *options
       b.tangled_initial = a.tangled_initial;
       b.objective_initial = a.objective_initial;
       a = b;
-    } else if (status == HOC_OK) {
-      snapshot_restore(&first, mesh);
-      a.iterations = b.iterations; /* sweeps made, though not kept */
+    } else if (first.param) {
+      snapshot_restore(&first, mesh); /* (also when the protected run failed) */
+      if (status == HOC_OK) a.iterations = b.iterations; /* sweeps made, though not kept */
     }
   }
   a.seconds = now() - t0;
