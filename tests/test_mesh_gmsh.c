@@ -59,10 +59,9 @@ static void test_model(const char *name, double min_linear_q) {
   hoc_model_destroy(&model);
 }
 
-/* gmsh's own order 3 at gmsh's default size, read back and measured. */
-static void test_gmsh_order3_t20(void) {
-  hoc_model *model = open_bundled("gmsh_t20_component8.step");
-  if (!model) return;
+/* gmsh's own surface mesh of the open model, of order p at gmsh's
+ * default size (as `gmsh MODEL -2 -order p` makes it), written to path. */
+static void gmsh_own_mesh(int p, const char *path) {
   int ierr = 0;
   /* gmsh's defaults, as the gmsh program uses them */
   gmshOptionSetNumber("Mesh.MeshSizeMax", 1e22, &ierr);
@@ -70,10 +69,17 @@ static void test_gmsh_order3_t20(void) {
   gmshOptionSetNumber("Mesh.MeshSizeFromCurvature", 0, &ierr);
   gmshModelMeshGenerate(2, &ierr);
   CHECK(ierr == 0);
-  gmshModelMeshSetOrder(3, &ierr);
+  gmshModelMeshSetOrder(p, &ierr);
   CHECK(ierr == 0);
-  gmshWrite("t20_gmsh_order3.msh", &ierr);
+  gmshWrite(path, &ierr);
   CHECK(ierr == 0);
+}
+
+/* gmsh's own order 3 at gmsh's default size, read back and measured. */
+static void test_gmsh_order3_t20(void) {
+  hoc_model *model = open_bundled("gmsh_t20_component8.step");
+  if (!model) return;
+  gmsh_own_mesh(3, "t20_gmsh_order3.msh");
   hoc_mesh *m;
   CHECK_OK(hoc_mesh_read_msh(model, "t20_gmsh_order3.msh", &m));
   if (m) {
@@ -641,16 +647,8 @@ static int log_sweep(void *user, const hoc_optimize_iteration *it) {
 static void test_protected_run(void) {
   hoc_model *model = open_bundled("occt_bottle.brep");
   if (!model) return;
+  gmsh_own_mesh(2, "bottle_gmsh_order2.msh");
   int ierr = 0;
-  gmshOptionSetNumber("Mesh.MeshSizeMax", 1e22, &ierr);
-  gmshOptionSetNumber("Mesh.MeshSizeMin", 0, &ierr);
-  gmshOptionSetNumber("Mesh.MeshSizeFromCurvature", 0, &ierr);
-  gmshModelMeshGenerate(2, &ierr);
-  CHECK(ierr == 0);
-  gmshModelMeshSetOrder(2, &ierr);
-  CHECK(ierr == 0);
-  gmshWrite("bottle_gmsh_order2.msh", &ierr);
-  CHECK(ierr == 0);
   hoc_mesh *m = NULL;
   CHECK_OK(hoc_mesh_read_msh(model, "bottle_gmsh_order2.msh", &m));
   remove("bottle_gmsh_order2.msh");
