@@ -277,16 +277,17 @@ static const char *usage_optimize =
     "the result with fewer tangled elements. Elements still tangled then are\n"
     "split (a 'split' stage; see --refinements): the new elements' nodes are\n"
     "placed straight between their corners, every other node stays. Two chains\n"
-    "of splits are made in turn from the unsplit result, one red-green, one at\n"
-    "longest edges (which cuts slivers across), until a result has no tangled\n"
-    "element; the result with the fewest tangled elements is kept.\n"
+    "of splits are made in turn, one red-green from the unsplit result, one at\n"
+    "longest edges (which cuts slivers across) from the mesh that result was\n"
+    "optimised from, until a result has no tangled element; the result with the\n"
+    "fewest tangled elements is kept.\n"
     "\n"
     "options:\n"
     "  -o, --output F.msh   optimized mesh (MSH 4.1), or F.vtu\n"
     "  --keep-nodes         always start from the input's own high-order nodes\n"
     "  --refinements N      if elements stay tangled, split them in four (their\n"
     "                       neighbours in two to four) and optimise again, at most\n"
-    "                       N times in each chain (default 3; 0 keeps the input's\n"
+    "                       N times in each chain (default 4; 0 keeps the input's\n"
     "                       elements)\n"
     "  --vtu F.vtu          also a VTU with q per element\n"
     "  --json F.json        the report as JSON\n"
@@ -815,12 +816,17 @@ static void print_faces(const hoc_mesh *mesh, const unsigned char *flag) {
   fprintf(stderr, "%s\n", more ? " ..." : "");
 }
 
-/* Where `optimize` leaves tangled elements: split them in four (their
- * neighbours as `kind` says, to keep the mesh conforming; children placed
- * straight between their corners) and optimise again: *fine, with the
- * report r (its first n_keep stages kept, then "split" and "optimized"). */
+/* Where `optimize` leaves tangled elements of *mesh: split them in four
+ * (their neighbours as `kind` says, to keep the mesh conforming; children
+ * placed straight between their corners) and optimise again: *fine, with
+ * the report r (its first n_keep stages kept, then "split" and
+ * "optimized"). The mesh split is `base` (the same elements as mesh, e.g.
+ * the start mesh was optimised from), or mesh itself if base is NULL; if
+ * fine_start is not NULL, it receives a copy of the split mesh before its
+ * optimisation. */
 static int split_tangled(const options *o, report *r, int n_keep, hoc_split_kind kind,
-                         const hoc_mesh *mesh, hoc_mesh **fine) {
+                         const hoc_mesh *mesh, const hoc_mesh *base, hoc_mesh **fine,
+                         hoc_mesh **fine_start) {
   size_t ne = hoc_mesh_num_elements(mesh), total = 0;
   unsigned char *tangled = calloc(ne ? ne : 1, 1);
   if (!tangled) {
@@ -829,7 +835,7 @@ static int split_tangled(const options *o, report *r, int n_keep, hoc_split_kind
   }
   double t0 = now();
   hoc_status st = hoc_mesh_measure(mesh, o->measure, NULL, tangled, NULL);
-  if (st == HOC_OK) st = hoc_mesh_split(mesh, tangled, kind, fine);
+  if (st == HOC_OK) st = hoc_mesh_split(base ? base : mesh, tangled, kind, fine);
   if (st != HOC_OK) {
     free(tangled);
     return fail(st, 0);
@@ -848,8 +854,12 @@ static int split_tangled(const options *o, report *r, int n_keep, hoc_split_kind
   free(tangled);
   r->n = n_keep; /* the stages before the optimisation stay */
   int code = measure_stage(o, r, "split", *fine, now() - t0, NULL);
+  if (!code && fine_start && (st = hoc_mesh_copy(*fine, fine_start)) != HOC_OK) code = fail(st, 0);
   if (!code) code = optimize_stage(o, r, *fine);
-  if (code) hoc_mesh_destroy(fine);
+  if (code) {
+    hoc_mesh_destroy(fine);
+    if (fine_start) hoc_mesh_destroy(fine_start);
+  }
   return code;
 }
 
@@ -867,23 +877,38 @@ static void drop_mesh(hoc_mesh **m, hoc_mesh *const *keep, int n) {
  * red-green (keeps shapes, but its two-way cuts make slivers thinner), one
  * at longest edges (cuts slivers across), each at most o->refinements
  * splits and each going on from its own latest result. Stops once a result
- * has no tangled element. *mesh and *r become the result with the fewest
- * tangled elements (the earlier on a tie); r->refinements goes on counting
- * with every split made; the split results' reports keep r's first n_keep
- * stages. A trial prints no closing note (its caller decides what it
- * keeps). */
-static int refine_tangled(const options *o, report *r, int n_keep, hoc_mesh **mesh, int trial) {
+ * has no tangled element. Given `start`, the mesh *mesh was optimised from
+ * (the same elements), the longest-edge chain splits that and then each of
+ * its own split meshes as they were before their optimisation (the
+ * elements that stay tangled flagged by the optimised ones): corners an
+ * optimisation moved into a sliver that folds in (u, v) give children
+ * folded the same way, split straight between them (gmsh's aircraft,
+ * face 69: from the optimised meshes 4, 4, 8 tangled in three splits, from
+ * the starts 6, 8, 4, 0 in four). *mesh and *r become the result with the
+ * fewest tangled elements (the earlier on a tie); r->refinements goes on
+ * counting with every split made; the split results' reports keep r's
+ * first n_keep stages. A trial prints no closing note (its caller decides
+ * what it keeps). */
+static int refine_tangled(const options *o, report *r, int n_keep, hoc_mesh **mesh,
+                          const hoc_mesh *start, int trial) {
   static const hoc_split_kind kinds[2] = {HOC_SPLIT_RED_GREEN, HOC_SPLIT_LONGEST_EDGE};
   hoc_mesh *base = *mesh, *best = base, *cur[2] = {base, base};
+  hoc_mesh *own_start = NULL; /* the longest-edge chain's latest split mesh, unoptimised */
   report best_r = *r, chain_r[2] = {*r, *r};
   int code = EXIT_OK, made = r->refinements;
   for (int level = 0; level < o->refinements && !code; ++level)
     for (int k = 0; k < 2 && !code && best_r.stages[best_r.n - 1].stats.tangled; ++k) {
-      hoc_mesh *fine = NULL;
+      hoc_mesh *fine = NULL, *fine_start = NULL;
+      int from_start = k == 1 && start;
       chain_r[k].refinements = made;
-      code = split_tangled(o, &chain_r[k], n_keep, kinds[k], cur[k], &fine);
+      code = split_tangled(o, &chain_r[k], n_keep, kinds[k], cur[k], from_start ? start : NULL,
+                           &fine, from_start ? &fine_start : NULL);
       made = chain_r[k].refinements;
       if (code) break;
+      if (from_start) {
+        hoc_mesh_destroy(&own_start);
+        start = own_start = fine_start;
+      }
       hoc_mesh *keep[4] = {base, best, cur[1 - k], fine};
       drop_mesh(&cur[k], keep, 4);
       cur[k] = fine;
@@ -895,6 +920,7 @@ static int refine_tangled(const options *o, report *r, int n_keep, hoc_mesh **me
         best_r = chain_r[k];
       }
     }
+  hoc_mesh_destroy(&own_start);
   int improved = best != base;
   for (int k = 0; k < 2; ++k) {
     hoc_mesh *keep[3] = {base, best, k ? cur[0] : NULL};
@@ -927,7 +953,7 @@ static int try_split_first(const options *o, report *r, hoc_mesh **ho, int *done
   if (!o->quiet)
     fprintf(stderr, "%s: splitting the tangled elements first (kept if that leaves none tangled)\n",
             program);
-  int code = refine_tangled(o, &trial, 2, &copy, 1);
+  int code = refine_tangled(o, &trial, 2, &copy, NULL, 1);
   size_t left = code ? 0 : trial.stages[trial.n - 1].stats.tangled;
   if (!code && !left) {
     if (!o->quiet)
@@ -1126,7 +1152,7 @@ static int cmd_mesh(int argc, char **argv) {
         r.refinements = made;
         r.remeshings = remade;
       }
-      if ((code = refine_tangled(&o, &r, 2, &ho, 0))) goto done;
+      if ((code = refine_tangled(&o, &r, 2, &ho, NULL, 0))) goto done;
       final = ho;
       break;
     }
@@ -1293,24 +1319,43 @@ static int replace_nodes(const options *o, report *r, const hoc_mesh *mesh, hoc_
   return EXIT_OK;
 }
 
+/* optimize_stage on mesh, a copy of it before kept in *start (if that is
+ * not NULL): the start the result came from. */
+static int optimize_keep_start(const options *o, report *r, hoc_mesh *mesh, hoc_mesh **start) {
+  hoc_status st;
+  if (start && (st = hoc_mesh_copy(mesh, start)) != HOC_OK) return fail(st, 0);
+  int code = optimize_stage(o, r, mesh);
+  if (code && start) hoc_mesh_destroy(start);
+  return code;
+}
+
 /* Optimise *mesh, or where a re-placed start exists, that first and, if it
  * stays tangled, the input's own nodes too: the result with fewer tangled
- * elements (then the lower objective) is kept in *mesh. */
-static int optimize_starts(const options *o, report *r, hoc_mesh **mesh) {
-  hoc_mesh *alt = NULL;
+ * elements (then the lower objective) is kept in *mesh, and, if start is
+ * not NULL and the result keeps tangled elements, the mesh it was
+ * optimised from in *start (for refine_tangled). */
+static int optimize_starts(const options *o, report *r, hoc_mesh **mesh, hoc_mesh **start) {
+  hoc_mesh *alt = NULL, *alt_start = NULL;
   int code = EXIT_OK;
   if (!o->keep_nodes && r->stages[0].stats.tangled && hoc_mesh_order(*mesh) > 1 &&
       (code = replace_nodes(o, r, *mesh, &alt)))
     return code;
-  if (!alt) return optimize_stage(o, r, *mesh);
-  if ((code = optimize_stage(o, r, alt)) || !r->stages[r->n - 1].stats.tangled) {
+  if (!alt) {
+    code = optimize_keep_start(o, r, *mesh, start);
+    if (!code && start && !r->stages[r->n - 1].stats.tangled) hoc_mesh_destroy(start);
+    return code;
+  }
+  if ((code = optimize_keep_start(o, r, alt, start ? &alt_start : NULL)) ||
+      !r->stages[r->n - 1].stats.tangled) {
     hoc_mesh_destroy(mesh);
+    hoc_mesh_destroy(&alt_start);
     *mesh = alt;
     return code;
   }
   stage from_alt = r->stages[--r->n];
-  if ((code = optimize_stage(o, r, *mesh))) {
+  if ((code = optimize_keep_start(o, r, *mesh, start))) {
     hoc_mesh_destroy(&alt);
+    hoc_mesh_destroy(&alt_start);
     return code;
   }
   const stage *own = &r->stages[r->n - 1];
@@ -1326,8 +1371,13 @@ static int optimize_starts(const options *o, report *r, hoc_mesh **mesh) {
     r->stages[r->n - 1] = from_alt;
     hoc_mesh_destroy(mesh);
     *mesh = alt;
+    if (start) {
+      hoc_mesh_destroy(start);
+      *start = alt_start;
+    }
   } else {
     hoc_mesh_destroy(&alt);
+    hoc_mesh_destroy(&alt_start);
     r->stages[r->n - 2] = r->stages[r->n - 1]; /* the re-placed start was not used */
     r->n--;
   }
@@ -1336,7 +1386,7 @@ static int optimize_starts(const options *o, report *r, hoc_mesh **mesh) {
 
 static int cmd_optimize(int argc, char **argv) {
   options o = {0};
-  o.refinements = 3;
+  o.refinements = 4;
   const char *pos[2];
   int n_pos, pr = parse(argc, argv, &o, pos, 2, &n_pos, CMD_OPTIMIZE);
   if (pr < 0) {
@@ -1357,7 +1407,7 @@ static int cmd_optimize(int argc, char **argv) {
   if (o.threads) omp_set_num_threads(o.threads);
   int code = EXIT_OK;
   hoc_model *model = NULL;
-  hoc_mesh *mesh = NULL;
+  hoc_mesh *mesh = NULL, *start = NULL;
   double *q = NULL;
   report r = {0};
   hoc_status st = hoc_model_open(o.model, &model);
@@ -1369,10 +1419,11 @@ static int cmd_optimize(int argc, char **argv) {
     goto done;
   }
   if ((code = measure_stage(&o, &r, "input", mesh, now() - t0, NULL))) goto done;
-  if ((code = optimize_starts(&o, &r, &mesh))) goto done;
+  if ((code = optimize_starts(&o, &r, &mesh, o.refinements > 0 ? &start : NULL))) goto done;
   if (r.stages[r.n - 1].stats.tangled && o.refinements > 0 &&
-      (code = refine_tangled(&o, &r, 1, &mesh, 0)))
+      (code = refine_tangled(&o, &r, 1, &mesh, start, 0)))
     goto done;
+  hoc_mesh_destroy(&start);
   if (!o.quiet) {
     printf("mesh %s on %s: %zu nodes\n", o.mesh_in, o.model, hoc_mesh_num_nodes(mesh));
     print_table(&r);
@@ -1385,6 +1436,7 @@ static int cmd_optimize(int argc, char **argv) {
   if (r.stages[r.n - 1].stats.tangled) code = EXIT_TANGLED;
 done:
   free(q);
+  hoc_mesh_destroy(&start);
   hoc_mesh_destroy(&mesh);
   hoc_model_destroy(&model);
   return code;
