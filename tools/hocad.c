@@ -1333,25 +1333,22 @@ static int optimize_keep_start(const options *o, report *r, hoc_mesh *mesh, hoc_
 /* Optimise *mesh, or where a re-placed start exists, that first and, if it
  * stays tangled, the input's own nodes too: the result with fewer tangled
  * elements (then the lower objective) is kept in *mesh, and, if start is
- * not NULL and the result keeps tangled elements, the mesh it was
- * optimised from in *start (for refine_tangled). */
+ * not NULL, the mesh it was optimised from in *start (for refine_tangled). */
 static int optimize_starts(const options *o, report *r, hoc_mesh **mesh, hoc_mesh **start) {
   hoc_mesh *alt = NULL, *alt_start = NULL;
   int code = EXIT_OK;
   if (!o->keep_nodes && r->stages[0].stats.tangled && hoc_mesh_order(*mesh) > 1 &&
       (code = replace_nodes(o, r, *mesh, &alt)))
     return code;
-  if (!alt) {
-    code = optimize_keep_start(o, r, *mesh, start);
-    if (!code && start && !r->stages[r->n - 1].stats.tangled) hoc_mesh_destroy(start);
-    return code;
-  }
-  if ((code = optimize_keep_start(o, r, alt, start ? &alt_start : NULL)) ||
-      !r->stages[r->n - 1].stats.tangled) {
+  if (!alt) return optimize_keep_start(o, r, *mesh, start);
+  if ((code = optimize_keep_start(o, r, alt, start)) || !r->stages[r->n - 1].stats.tangled) {
     hoc_mesh_destroy(mesh);
-    hoc_mesh_destroy(&alt_start);
     *mesh = alt;
     return code;
+  }
+  if (start) { /* the re-placed start, until the input's own wins */
+    alt_start = *start;
+    *start = NULL;
   }
   stage from_alt = r->stages[--r->n];
   if ((code = optimize_keep_start(o, r, *mesh, start))) {
