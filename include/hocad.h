@@ -339,6 +339,9 @@ typedef struct hoc_optimize_result {
   int stopped_at_limit; /**< elements were still tangled when the last attempt had used all
                              its sweeps (not ended early by the 40-sweep stall rule or by
                              every node sleeping) */
+  size_t polished;      /**< elements the final polish untangled: a pattern search, node by node,
+                             on the exact verdict around each element the sweeps left tangled
+                             (when at most 32 are) */
   size_t free_nodes;    /**< nodes the optimiser could move */
   double seconds;
 } hoc_optimize_result;

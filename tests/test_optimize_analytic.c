@@ -204,6 +204,65 @@ static void check_second_attempt(void) {
   hoc_model_destroy(&model);
 }
 
+/* The optimiser's final polish alone (hoc_mesh_polish): on a valid mesh it
+ * moves nothing; an element folded a little (its interior node pushed past
+ * the middle of an edge) comes out valid with every node on the surface and
+ * no other element tangled; more than 32 tangled elements are left to the
+ * sweeps and splits (nothing moves). */
+static void check_polish(void) {
+  const double a = 3, b = 1;
+  hoc_model *model;
+  CHECK_OK(hoc_cad_create_analytic(HOC_ANALYTIC_TORUS, a, b, &model));
+  hoc_mesh *lin, *m;
+  CHECK_OK(hoc_mesh_grid_linear(model, 16, 6, &lin));
+  CHECK_OK(hoc_mesh_elevate(lin, 3, HOC_NODES_EQUISPACED, &m));
+  size_t fixed = 99;
+  double *before = malloc(3 * m->n_nodes * sizeof *before);
+  memcpy(before, m->xyz, 3 * m->n_nodes * sizeof *before);
+  CHECK_OK(hoc_mesh_polish(m, HOC_MEASURE_SHAPE, 0, &fixed));
+  CHECK(fixed == 0);
+  CHECK(!memcmp(before, m->xyz, 3 * m->n_nodes * sizeof *before));
+  /* element 37's interior node (p = 3: local node 9) past edge 0's middle */
+  size_t e = 37;
+  const double *u = m->elem_uv + 2 * e * (size_t)m->np;
+  double c[2] = {(u[0] + u[2] + u[4]) / 3, (u[1] + u[3] + u[5]) / 3};
+  double mid[2] = {0.5 * (u[0] + u[2]), 0.5 * (u[1] + u[3])};
+  double to[2] = {mid[0] + 0.3 * (mid[0] - c[0]), mid[1] + 0.3 * (mid[1] - c[1])};
+  move_node(m, e, 9, to);
+  CHECK_OK(hoc_mesh_update_xyz(m));
+  unsigned char *tangled = malloc(m->n_elems);
+  hoc_quality_stats st;
+  CHECK_OK(hoc_mesh_measure(m, HOC_MEASURE_SHAPE, NULL, tangled, &st));
+  CHECK(st.tangled == 1 && tangled[e]);
+  CHECK_OK(hoc_mesh_polish(m, HOC_MEASURE_SHAPE, 0, &fixed));
+  CHECK_OK(hoc_mesh_measure(m, HOC_MEASURE_SHAPE, NULL, tangled, &st));
+  printf("polish: 1 folded element -> %zu tangled (%zu untangled), min q %.3f\n", st.tangled, fixed,
+         st.min);
+  CHECK(fixed == 1 && st.tangled == 0);
+  double worst = 0;
+  for (size_t i = 0; i < m->n_nodes; ++i)
+    worst = fmax(worst, off_surface(HOC_ANALYTIC_TORUS, a, b, m->xyz + 3 * i));
+  CHECK(worst <= 1e-13 * a);
+  /* only the folded element's neighbourhood moved: its corners' elements */
+  size_t moved = 0;
+  for (size_t i = 0; i < m->n_nodes; ++i)
+    moved += memcmp(before + 3 * i, m->xyz + 3 * i, 3 * sizeof *before) != 0;
+  CHECK(moved > 0 && moved < m->n_nodes / 4);
+  /* many folds: beyond the polish's budget, nothing moves */
+  tangle(m, 1);
+  CHECK_OK(hoc_mesh_measure(m, HOC_MEASURE_SHAPE, NULL, NULL, &st));
+  CHECK(st.tangled > 32);
+  memcpy(before, m->xyz, 3 * m->n_nodes * sizeof *before);
+  CHECK_OK(hoc_mesh_polish(m, HOC_MEASURE_SHAPE, 0, &fixed));
+  CHECK(fixed == 0);
+  CHECK(!memcmp(before, m->xyz, 3 * m->n_nodes * sizeof *before));
+  free(tangled);
+  free(before);
+  hoc_mesh_destroy(&m);
+  hoc_mesh_destroy(&lin);
+  hoc_model_destroy(&model);
+}
+
 int main(void) {
   check_kind(HOC_ANALYTIC_SPHERE, 1.0, 0, 16, 8, 3);
   check_kind(HOC_ANALYTIC_CYLINDER, 1.0, 2.0, 12, 4, 3);
@@ -212,5 +271,6 @@ int main(void) {
   check_optimum();
   check_threads();
   check_second_attempt();
+  check_polish();
   return test_report();
 }

@@ -440,6 +440,7 @@ typedef struct stage {
   int second_attempt;   /* first sweep of the optimiser's second attempt, or 0 */
   int exact_phase;      /* first sweep of its exact phase, or 0 */
   int protected_run;    /* first sweep of the kept protected run, or 0 */
+  size_t polished;      /* elements the optimiser's final polish untangled */
   double objective_initial, objective;
 } stage;
 
@@ -465,9 +466,11 @@ static void print_table(const report *r) {
   }
   for (int i = 0; i < r->n; ++i) {
     const stage *s = &r->stages[i];
-    if (s->optimized)
-      printf("%s: %d iterations, objective %.6g -> %.6g%s\n", s->name, s->iterations,
-             s->objective_initial, s->objective, s->converged ? ", converged" : ", not converged");
+    if (!s->optimized) continue;
+    printf("%s: %d iterations, objective %.6g -> %.6g%s", s->name, s->iterations,
+           s->objective_initial, s->objective, s->converged ? ", converged" : ", not converged");
+    if (s->polished) printf(", %zu untangled by the final polish", s->polished);
+    printf("\n");
   }
 }
 
@@ -540,10 +543,10 @@ static int write_json(const char *path, const options *o, const report *r, const
       text_add(&t,
                ", \"iterations\": %d, \"converged\": %s, \"best_iteration\": %d, "
                "\"second_attempt\": %d, \"exact_phase\": %d, \"protected_run\": %d, "
-               "\"objective_initial\": %.17g, "
+               "\"polished\": %zu, \"objective_initial\": %.17g, "
                "\"objective\": %.17g",
                s->iterations, s->converged ? "true" : "false", s->best_iteration, s->second_attempt,
-               s->exact_phase, s->protected_run, s->objective_initial, s->objective);
+               s->exact_phase, s->protected_run, s->polished, s->objective_initial, s->objective);
     text_add(&t, "}");
   }
   text_add(&t,
@@ -638,6 +641,9 @@ static int optimize_stage(const options *o, report *r, hoc_mesh *mesh) {
   double t0 = now();
   hoc_status st = hoc_mesh_optimize(mesh, &oo, &res);
   if (st != HOC_OK) return fail(st, 0);
+  if (res.polished && !o->quiet)
+    fprintf(stderr, "%s: note: the final polish untangled %zu element(s) the sweeps left\n",
+            program, res.polished);
   int code = measure_stage(o, r, "optimized", mesh, now() - t0, NULL);
   if (code) return code;
   stage *s = &r->stages[r->n - 1];
@@ -649,6 +655,7 @@ static int optimize_stage(const options *o, report *r, hoc_mesh *mesh) {
   s->second_attempt = res.second_attempt;
   s->exact_phase = res.exact_phase;
   s->protected_run = res.protected_run;
+  s->polished = res.polished;
   s->objective_initial = res.objective_initial;
   s->objective = res.objective_final;
   return EXIT_OK;
@@ -902,8 +909,10 @@ static int refine_tangled(const options *o, report *r, int n_keep, hoc_mesh **me
       hoc_mesh *fine = NULL, *fine_start = NULL;
       int from_start = k == 1 && start;
       chain_r[k].refinements = made;
+      /* the last level's split mesh is never split again: no copy of it */
+      int more = level + 1 < o->refinements;
       code = split_tangled(o, &chain_r[k], n_keep, kinds[k], cur[k], from_start ? start : NULL,
-                           &fine, from_start ? &fine_start : NULL);
+                           &fine, from_start && more ? &fine_start : NULL);
       made = chain_r[k].refinements;
       if (code) break;
       if (from_start) {

@@ -143,6 +143,13 @@ hoc_status hoc_mesh_slot_normals(const hoc_mesh *mesh, double *normal);
  *  nu x nv cells of its parameter domain, split into triangles, order 1. */
 hoc_status hoc_mesh_grid_linear(hoc_model *model, int nu, int nv, hoc_mesh **mesh);
 
+/** The optimiser's final polish alone (optimize/optimize.c): a pattern
+ *  search, node by node in the parametric coordinates, around each element
+ *  the exact test finds tangled (when at most 32 are), keeping only moves
+ *  that untangle elements or shrink their negative sigma without tangling
+ *  a valid one. *untangled: how many it untangled. */
+hoc_status hoc_mesh_polish(hoc_mesh *mesh, hoc_measure measure, int fix_curves, size_t *untangled);
+
 /** Linear surface mesh of the current gmsh model (mesh/linear_gmsh.c). */
 hoc_status hoc_mesh_generate_linear_gmsh(hoc_model *model, const hoc_linear_options *options,
                                          hoc_mesh **mesh);
