@@ -61,6 +61,13 @@ static void tangle(hoc_mesh *m, int every) {
   hoc_mesh_update_xyz(m);
 }
 
+/* A torus (radii a, b), its 16 x 6 grid and that raised to order 3. */
+static void torus_p3(double a, double b, hoc_model **model, hoc_mesh **lin, hoc_mesh **m) {
+  CHECK_OK(hoc_cad_create_analytic(HOC_ANALYTIC_TORUS, a, b, model));
+  CHECK_OK(hoc_mesh_grid_linear(*model, 16, 6, lin));
+  CHECK_OK(hoc_mesh_elevate(*lin, 3, HOC_NODES_EQUISPACED, m));
+}
+
 static void check_kind(hoc_analytic_kind kind, double a, double b, int nu, int nv, int p) {
   hoc_model *model;
   CHECK_OK(hoc_cad_create_analytic(kind, a, b, &model));
@@ -173,10 +180,8 @@ static void check_threads(void) {
 static void check_second_attempt(void) {
   const double a = 3, b = 1;
   hoc_model *model;
-  CHECK_OK(hoc_cad_create_analytic(HOC_ANALYTIC_TORUS, a, b, &model));
   hoc_mesh *lin, *m;
-  CHECK_OK(hoc_mesh_grid_linear(model, 16, 6, &lin));
-  CHECK_OK(hoc_mesh_elevate(lin, 3, HOC_NODES_EQUISPACED, &m));
+  torus_p3(a, b, &model, &lin, &m);
   tangle(m, 2);
   hoc_optimize_options o;
   hoc_optimize_options_default(&o);
@@ -212,10 +217,8 @@ static void check_second_attempt(void) {
 static void check_polish(void) {
   const double a = 3, b = 1;
   hoc_model *model;
-  CHECK_OK(hoc_cad_create_analytic(HOC_ANALYTIC_TORUS, a, b, &model));
   hoc_mesh *lin, *m;
-  CHECK_OK(hoc_mesh_grid_linear(model, 16, 6, &lin));
-  CHECK_OK(hoc_mesh_elevate(lin, 3, HOC_NODES_EQUISPACED, &m));
+  torus_p3(a, b, &model, &lin, &m);
   size_t fixed = 99;
   double *before = malloc(3 * m->n_nodes * sizeof *before);
   memcpy(before, m->xyz, 3 * m->n_nodes * sizeof *before);

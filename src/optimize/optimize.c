@@ -1537,58 +1537,36 @@ static hoc_status polish_patch(opt *o, size_t e0, unsigned char *mark, size_t *f
   hoc_mesh *m = o->m;
   int np = o->np;
   hoc_status status = HOC_OK;
-  size_t *nodes = NULL, *el = NULL, nn = 0, nel = 0, cap_n = 64, cap_e = 64;
+  growlist gn = {0}, ge = {0};
   double *margin = NULL, *trial = NULL, *x = NULL, *nrm = NULL, *uv = NULL;
   unsigned char *pv = NULL;
   *fixed = 0;
-  nodes = malloc(cap_n * sizeof *nodes);
-  el = malloc(cap_e * sizeof *el);
-  if (!(nodes && el)) {
-    status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
-    goto done;
-  }
   /* the patch's nodes, then every element using one of them (in order) */
-  for (int c = 0; c < 3; ++c) {
+  for (int c = 0; c < 3 && status == HOC_OK; ++c) {
     size_t corner = m->conn[e0 * (size_t)np + (size_t)c];
     for (size_t a = o->ne_start[corner]; a < o->ne_start[corner + 1]; ++a) {
       size_t e = o->ne_elem[a];
-      for (int i = 0; i < np; ++i) {
+      for (int i = 0; i < np && status == HOC_OK; ++i) {
         size_t k = m->conn[e * (size_t)np + (size_t)i];
         if (!o->ndof[k] || o->moving[k]) continue;
         o->moving[k] = 1; /* (as a mark while collecting) */
-        if (nn == cap_n) {
-          size_t *g = realloc(nodes, 2 * cap_n * sizeof *g);
-          if (!(g)) {
-            status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
-            goto done;
-          }
-          nodes = g;
-          cap_n *= 2;
-        }
-        nodes[nn++] = k;
+        status = grow_push(&gn, k);
       }
     }
   }
-  for (size_t a = 0; a < nn; ++a)
-    for (size_t b = o->ne_start[nodes[a]]; b < o->ne_start[nodes[a] + 1]; ++b) {
+  for (size_t a = 0; a < gn.n && status == HOC_OK; ++a)
+    for (size_t b = o->ne_start[gn.v[a]]; b < o->ne_start[gn.v[a] + 1] && status == HOC_OK; ++b) {
       size_t e = o->ne_elem[b];
       if (mark[e]) continue;
       mark[e] = 1;
-      if (nel == cap_e) {
-        size_t *g = realloc(el, 2 * cap_e * sizeof *g);
-        if (!(g)) {
-          status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
-          goto done;
-        }
-        el = g;
-        cap_e *= 2;
-      }
-      el[nel++] = e;
+      status = grow_push(&ge, e);
     }
-  for (size_t a = 0; a < nn; ++a)
-    o->moving[nodes[a]] = 0;
-  for (size_t a = 0; a < nel; ++a)
-    mark[el[a]] = 0;
+  for (size_t a = 0; a < gn.n; ++a)
+    o->moving[gn.v[a]] = 0;
+  for (size_t a = 0; a < ge.n; ++a)
+    mark[ge.v[a]] = 0;
+  if (status != HOC_OK || !gn.n) goto done; /* (every node fixed: nothing to move) */
+  const size_t *nodes = gn.v, *el = ge.v, nn = gn.n, nel = ge.n;
   margin = malloc(2 * nel * sizeof *margin);
   pv = malloc(nel);
   x = malloc(3 * (size_t)np * sizeof *x);
@@ -1662,8 +1640,8 @@ static hoc_status polish_patch(opt *o, size_t e0, unsigned char *mark, size_t *f
   }
   *fixed = count0 - count;
 done:
-  free(nodes);
-  free(el);
+  free(gn.v);
+  free(ge.v);
   free(margin);
   free(pv);
   free(x);
