@@ -1751,6 +1751,7 @@ static hoc_status optimize_run(hoc_mesh *mesh, const hoc_optimize_options *optio
    * mesh's run of untangled sweeps (or the second attempt) began */
   int stalled = 0, last = it0 + o.max_iterations, since = it0;
   int fell = it0; /* the last sweep of this attempt with a new fewest tangled */
+  int smoothing = 0; /* sweeps after a polish that left none tangled */
   int cut = 0;  /* this attempt was ended before its sweeps ran out */
   double hist_f[11], hist_q[11];
   int it = it0;
@@ -1926,13 +1927,27 @@ sweeps:
    * out: --max-iterations asked for no more) */
   if (tangled && ctx.exact && !res.stopped_at_limit) {
     size_t before = tangled;
+    size_t found;
     HOC_TRY_GOTO(snapshot_take(&pre, mesh, tangled, f), done);
-    HOC_TRY_GOTO(polish(&ctx, &res.polished), done);
+    HOC_TRY_GOTO(polish(&ctx, &found), done);
     HOC_TRY_GOTO(sweep_start(&ctx, &f, &qmin, &tangled), done);
     if (tangled < before) {
-      res.polished = before - tangled;
+      res.polished += before - tangled;
+      if (!tangled && !smoothing) {
+        /* all valid now: sweeps again, which keep every element valid,
+         * smooth the polished patches (their elements come out of the
+         * search barely valid) */
+        smoothing = 1;
+        res.converged = 0;
+        ctx.eps = 1e-3;
+        stalled = 0;
+        since = fell = it;
+        cut = 0;
+        last = it + (o.max_iterations + 1) / 2;
+        wake_all(&ctx);
+        goto sweeps;
+      }
     } else { /* none untangled: the sweeps' state, whose shapes are better */
-      res.polished = 0;
       snapshot_restore(&pre, mesh);
       HOC_TRY_GOTO(eval_all(&ctx), done);
       memset(ctx.dirty, 1, mesh->n_elems);
