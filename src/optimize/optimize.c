@@ -1486,9 +1486,6 @@ static void snapshot_restore(const snapshot *s, hoc_mesh *m) {
   memcpy(m->line_t, s->line_t, 2 * m->n_lines * sizeof *s->line_t);
 }
 
-/* One run of the optimiser from the mesh as it is (see hoc_mesh_optimize);
- * its sweeps are numbered from it0 + 1, its seconds from t0; *limited:
- * its first phase used all its sweeps with elements still tangled. */
 /* Polish ------------------------------------------------------------------ */
 
 /* The final polish of the elements the sweeps leave tangled: a
@@ -1531,16 +1528,14 @@ static void polish_score(const opt *o, const size_t *el, size_t n, double *margi
   }
 }
 
-/* One patch: the free nodes of the elements sharing a corner with e0.
- * *fixed is how many of its elements the search untangled. */
-static hoc_status polish_patch(opt *o, size_t e0, unsigned char *mark, size_t *fixed) {
+/* One patch: the free nodes of the elements sharing a corner with e0. */
+static hoc_status polish_patch(opt *o, size_t e0, unsigned char *mark) {
   hoc_mesh *m = o->m;
   int np = o->np;
   hoc_status status = HOC_OK;
   growlist gn = {0}, ge = {0};
   double *margin = NULL, *trial = NULL, *x = NULL, *nrm = NULL, *uv = NULL;
   unsigned char *pv = NULL;
-  *fixed = 0;
   /* the patch's nodes, then every element using one of them (in order) */
   for (int c = 0; c < 3 && status == HOC_OK; ++c) {
     size_t corner = m->conn[e0 * (size_t)np + (size_t)c];
@@ -1577,10 +1572,9 @@ static hoc_status polish_patch(opt *o, size_t e0, unsigned char *mark, size_t *f
     goto done;
   }
   trial = margin + nel;
-  size_t count, count0;
+  size_t count;
   double neg;
   polish_score(o, el, nel, margin, x, nrm, &count, &neg);
-  count0 = count;
   for (size_t a = 0; a < nel; ++a)
     pv[a] = (unsigned char)param_valid(o, el[a], uv);
   size_t measures = nel;
@@ -1638,7 +1632,6 @@ static hoc_status polish_patch(opt *o, size_t e0, unsigned char *mark, size_t *f
     }
     if (!improved) share *= 0.5;
   }
-  *fixed = count0 - count;
 done:
   free(gn.v);
   free(ge.v);
@@ -1651,10 +1644,10 @@ done:
 }
 
 /* The polish of every element still tangled by the exact test (at most
- * POLISH_MAX_TANGLED of them), in element order. */
-static hoc_status polish(opt *o, size_t *fixed) {
+ * POLISH_MAX_TANGLED of them), in element order; the caller counts what it
+ * untangled at its next sweep_start. */
+static hoc_status polish(opt *o) {
   hoc_mesh *m = o->m;
-  *fixed = 0;
   size_t tangled = 0;
   for (size_t e = 0; e < m->n_elems; ++e)
     tangled += o->qe[e] == 0.0;
@@ -1669,9 +1662,7 @@ static hoc_status polish(opt *o, size_t *fixed) {
   hoc_status status = HOC_OK;
   for (size_t e = 0; e < m->n_elems && status == HOC_OK; ++e) {
     if (o->qe[e] != 0.0 || polish_margin(o, e, x, x + 3 * o->np) > 0) continue;
-    size_t f = 0;
-    status = polish_patch(o, e, mark, &f);
-    *fixed += f;
+    status = polish_patch(o, e, mark);
   }
   free(x);
   free(mark);
@@ -1691,13 +1682,16 @@ hoc_status hoc_mesh_polish(hoc_mesh *mesh, hoc_measure measure, int fix_curves, 
   if (status == HOC_OK) status = eval_all(&ctx);
   ctx.exact = 1;
   if (status == HOC_OK) status = sweep_start(&ctx, &f, &qmin, &before);
-  if (status == HOC_OK) status = polish(&ctx, untangled);
+  if (status == HOC_OK) status = polish(&ctx);
   if (status == HOC_OK) status = sweep_start(&ctx, &f, &qmin, &after);
   if (status == HOC_OK) *untangled = before > after ? before - after : 0;
   opt_free(&ctx);
   return status;
 }
 
+/* One run of the optimiser from the mesh as it is (see hoc_mesh_optimize);
+ * its sweeps are numbered from it0 + 1, its seconds from t0; *limited:
+ * its first phase used all its sweeps with elements still tangled. */
 static hoc_status optimize_run(hoc_mesh *mesh, const hoc_optimize_options *options, int protect,
                                int it0, double t0, hoc_optimize_result *result, int *limited) {
   *limited = 0;
@@ -1927,9 +1921,8 @@ sweeps:
    * out: --max-iterations asked for no more) */
   if (tangled && ctx.exact && !res.stopped_at_limit) {
     size_t before = tangled;
-    size_t found;
     HOC_TRY_GOTO(snapshot_take(&pre, mesh, tangled, f), done);
-    HOC_TRY_GOTO(polish(&ctx, &found), done);
+    HOC_TRY_GOTO(polish(&ctx), done);
     HOC_TRY_GOTO(sweep_start(&ctx, &f, &qmin, &tangled), done);
     if (tangled < before) {
       res.polished += before - tangled;
