@@ -203,6 +203,41 @@ static int walk_next(point_walk *w, double *a1, double *a2, double *nq) {
   return w->k++;
 }
 
+double hoc_element_min_sigma_area(const hoc_quality_tables *t, const double *x, const double *n) {
+  const int np = t->np;
+  double mn = INFINITY;
+  for (int b = 0; b < t->n_check_blocks; ++b)
+    for (int l = 0; l < HOC_QB; ++l) {
+      size_t off = (size_t)b * (size_t)np * HOC_QB + (size_t)l;
+      double a1[3] = {0, 0, 0}, a2[3] = {0, 0, 0}, nq[3] = {0, 0, 0};
+      for (int i = 0; i < np; ++i) {
+        double gx = t->Bx[off + (size_t)i * HOC_QB], gy = t->By[off + (size_t)i * HOC_QB],
+               gn = t->Bn[off + (size_t)i * HOC_QB];
+        for (int c = 0; c < 3; ++c) {
+          a1[c] += gx * x[3 * i + c];
+          a2[c] += gy * x[3 * i + c];
+          nq[c] += gn * n[3 * i + c];
+        }
+      }
+      double c0 = a1[1] * a2[2] - a1[2] * a2[1], c1 = a1[2] * a2[0] - a1[0] * a2[2],
+             c2 = a1[0] * a2[1] - a1[1] * a2[0];
+      double sig = sqrt(c0 * c0 + c1 * c1 + c2 * c2);
+      if (!(c0 * nq[0] + c1 * nq[1] + c2 * nq[2] > 0)) sig = -sig;
+      if (!(sig >= mn)) mn = sig;
+    }
+  /* the corners' straight triangle, in the same units (a right angle at
+   * corner 0 in the reference triangle, whose ideal map is fixed) */
+  double e1[3], e2[3];
+  for (int c = 0; c < 3; ++c) {
+    e1[c] = x[3 + c] - x[c];
+    e2[c] = x[6 + c] - x[c];
+  }
+  double d0 = e1[1] * e2[2] - e1[2] * e2[1], d1 = e1[2] * e2[0] - e1[0] * e2[2],
+         d2 = e1[0] * e2[1] - e1[1] * e2[0];
+  double area = sqrt(d0 * d0 + d1 * d1 + d2 * d2);
+  return area > 0 ? mn / area : mn;
+}
+
 double hoc_element_quality(const hoc_quality_tables *t, hoc_measure measure, const double *x,
                            const double *n, double *eta_out, double *min_sigma) {
   return hoc_element_quality_test(t, measure, x, n, 1, eta_out, min_sigma);

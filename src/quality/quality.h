@@ -123,6 +123,13 @@ double hoc_element_quality(const hoc_quality_tables *t, hoc_measure measure, con
 double hoc_element_quality_test(const hoc_quality_tables *t, hoc_measure measure, const double *x,
                                 const double *n, int exact, double *eta, double *min_sigma);
 
+/** The smallest sigma (the tangent-plane determinant, unnormalised) over
+ *  the points hoc_element_quality samples, over the area scale of the
+ *  straight triangle of the element's corners: a measure of how deep a
+ *  fold is that no node can shrink by moving far away (sigma / |D phi|^2
+ *  tends to 0 as one node's pull dominates D phi). */
+double hoc_element_min_sigma_area(const hoc_quality_tables *t, const double *x, const double *n);
+
 /** Vector width of hoc_element_quality: 0 the widest the CPU runs (the
  *  default), 2 (SSE2) or 4 (AVX2, where the CPU has it). For tests; not
  *  to be changed while other threads measure. Returns the width in use. */
