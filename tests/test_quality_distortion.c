@@ -320,6 +320,52 @@ static void test_widths_agree(void) {
   hoc_quality_set_width(0);
 }
 
+/* hoc_element_min_sigma_area: sigma over the corners' area is 2/sqrt(3)
+ * on any straight element (the ideal map's determinant is sqrt(3)/2 of
+ * the reference one), its negative with the normals reversed; and unlike
+ * sigma / |D phi|^2 it deepens as a fold's node is pulled farther out. */
+static void test_min_sigma_area(void) {
+  for (int p = 1; p <= 6; ++p) {
+    const hoc_quality_tables *t;
+    CHECK_OK(hoc_quality_tables_get(p, HOC_NODES_EQUISPACED, &t));
+    size_t np = (size_t)t->np;
+    double *x = calloc(3 * np, sizeof *x), *n = calloc(3 * np, sizeof *n);
+    for (int trial = 0; trial < 5; ++trial) {
+      double A[6], b[3] = {rnd(), rnd(), rnd()};
+      for (int k = 0; k < 6; ++k)
+        A[k] = rnd() - 0.5;
+      affine_element(t, A, b, x);
+      double c[3] = {A[2] * A[5] - A[4] * A[3], A[4] * A[1] - A[0] * A[5],
+                     A[0] * A[3] - A[2] * A[1]};
+      double lc = sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+      for (int k = 0; k < 3; ++k)
+        c[k] /= lc;
+      constant_normals(t->np, c, n);
+      CHECK_NEAR(hoc_element_min_sigma_area(t, x, n), 2 / SQRT3, 1e-12);
+      for (int k = 0; k < 3; ++k)
+        c[k] = -c[k];
+      constant_normals(t->np, c, n);
+      CHECK_NEAR(hoc_element_min_sigma_area(t, x, n), -2 / SQRT3, 1e-12);
+    }
+    free(x);
+    free(n);
+  }
+  const hoc_quality_tables *t;
+  CHECK_OK(hoc_quality_tables_get(3, HOC_NODES_EQUISPACED, &t));
+  double x[30], n[30], up[3] = {0, 0, 1}, sig[2], rel[2];
+  const double A[6] = {1, 0, 0, 1, 0, 0};
+  constant_normals(t->np, up, n);
+  for (int k = 0; k < 2; ++k) {
+    affine_element(t, A, NULL, x);
+    x[3 * 9 + 1] -= k ? 10 : 1; /* the interior node below edge 0 */
+    double eta;
+    CHECK(hoc_element_quality(t, HOC_MEASURE_SHAPE, x, n, &eta, &rel[k]) == 0.0);
+    sig[k] = hoc_element_min_sigma_area(t, x, n);
+  }
+  CHECK(sig[1] < sig[0] && sig[0] < 0);
+  CHECK(rel[0] < rel[1] && rel[1] < 0);
+}
+
 int main(void) {
   /* every closed-form test at each vector width of the measuring kernel */
   for (int w = 2; w <= 4; w += 2) {
@@ -333,5 +379,6 @@ int main(void) {
   test_widths_agree();
   test_gradients();
   test_regularisation();
+  test_min_sigma_area();
   return test_report();
 }
