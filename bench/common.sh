@@ -11,6 +11,16 @@ pick_gmsh() {
   echo "$g"
 }
 
+# need_time: stop unless GNU time is there (Debian's package `time`, not the
+# shell's keyword); the scripts that take peak memory with it call this, as
+# without it every run would look like a failure of hocad.
+need_time() {
+  if [ ! -x /usr/bin/time ]; then
+    echo "bench: /usr/bin/time is missing: apt-get install time" >&2
+    exit 1
+  fi
+}
+
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 

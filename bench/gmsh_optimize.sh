@@ -15,6 +15,7 @@
 # SPDX-License-Identifier: GPL-2.0-or-later
 set -u
 . "$(dirname "$0")/common.sh"
+need_time
 hocad=$(readlink -f "${1:-$here/build/hocad}")
 if [ "${2:-}" = lib ]; then
   gmsh=$here/build/tests/gmsh_ho_mesh

@@ -18,6 +18,7 @@
 # SPDX-License-Identifier: GPL-2.0-or-later
 set -u
 . "$(dirname "$0")/common.sh"
+need_time
 hocad=$(readlink -f "${1:-$here/build/hocad}")
 models=$(readlink -f "${2:-$here/examples/models}")
 list=${BENCH_MODELS:-$(cd "$models" && ls *.step *.stp *.brep *.iges *.igs 2>/dev/null)}

@@ -12,6 +12,7 @@
 # SPDX-License-Identifier: GPL-2.0-or-later
 set -u
 . "$(dirname "$0")/common.sh"
+need_time
 hocad=$(readlink -f "${1:-$here/build/hocad}")
 gmsh=$(pick_gmsh "${2:-}")
 model=$(readlink -f "${3:-$here/examples/models/D150_aircraft_fused.brep}")
