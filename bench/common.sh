@@ -21,6 +21,16 @@ need_time() {
   fi
 }
 
+# need_hocad PATH: stop unless PATH is an executable hocad (the CLI's target
+# is hocad-cli, built with the bench target: `cmake --build build --target
+# bench`).
+need_hocad() {
+  if [ ! -x "$1" ] || [ -d "$1" ]; then
+    echo "bench: no hocad at $1: cmake --build build --target bench" >&2
+    exit 1
+  fi
+}
+
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 

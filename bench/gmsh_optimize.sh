@@ -17,6 +17,7 @@ set -u
 . "$(dirname "$0")/common.sh"
 need_time
 hocad=$(readlink -f "${1:-$here/build/hocad}")
+need_hocad "$hocad"
 if [ "${2:-}" = lib ]; then
   gmsh=$here/build/tests/gmsh_ho_mesh
 else

@@ -20,6 +20,7 @@ set -u
 . "$(dirname "$0")/common.sh"
 need_time
 hocad=$(readlink -f "${1:-$here/build/hocad}")
+need_hocad "$hocad"
 models=$(readlink -f "${2:-$here/examples/models}")
 list=${BENCH_MODELS:-$(cd "$models" && ls *.step *.stp *.brep *.iges *.igs 2>/dev/null)}
 orders=${BENCH_ORDERS:-"2 3 5"}

@@ -14,6 +14,7 @@
 set -u
 . "$(dirname "$0")/common.sh"
 hocad=$(readlink -f "${1:-$here/build/hocad}")
+need_hocad "$hocad"
 gmsh=$(pick_gmsh "${2:-}")
 model=$(readlink -f "${3:-$here/examples/models/D150_aircraft_fused.brep}")
 h=${BENCH_SIZE:-0.0906}
