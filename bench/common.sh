@@ -21,12 +21,14 @@ need_time() {
   fi
 }
 
-# need_hocad PATH: stop unless PATH is an executable hocad (the CLI's target
-# is hocad-cli, built with the bench target: `cmake --build build --target
+# use_hocad [HOCAD]: set hocad to the given hocad, else build/hocad, as an
+# absolute path; stop unless it is an executable (the CLI's target is
+# hocad-cli, built with the bench target: `cmake --build build --target
 # bench`).
-need_hocad() {
-  if [ ! -x "$1" ] || [ -d "$1" ]; then
-    echo "bench: no hocad at $1: cmake --build build --target bench" >&2
+use_hocad() {
+  hocad=$(readlink -f "${1:-$here/build/hocad}")
+  if [ ! -x "$hocad" ] || [ -d "$hocad" ]; then
+    echo "bench: no hocad at ${1:-$here/build/hocad}: cmake --build build --target bench" >&2
     exit 1
   fi
 }

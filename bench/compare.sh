@@ -17,8 +17,7 @@
 set -u
 . "$(dirname "$0")/common.sh"
 need_time
-hocad=$(readlink -f "${1:-$here/build/hocad}")
-need_hocad "$hocad"
+use_hocad "${1:-}"
 gmsh=$(pick_gmsh "${2:-}")
 models=$(readlink -f "${3:-$here/examples/models}")
 threads=${BENCH_THREADS:-1}

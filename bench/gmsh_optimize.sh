@@ -16,8 +16,7 @@
 set -u
 . "$(dirname "$0")/common.sh"
 need_time
-hocad=$(readlink -f "${1:-$here/build/hocad}")
-need_hocad "$hocad"
+use_hocad "${1:-}"
 if [ "${2:-}" = lib ]; then
   gmsh=$here/build/tests/gmsh_ho_mesh
 else

@@ -19,8 +19,7 @@
 set -u
 . "$(dirname "$0")/common.sh"
 need_time
-hocad=$(readlink -f "${1:-$here/build/hocad}")
-need_hocad "$hocad"
+use_hocad "${1:-}"
 models=$(readlink -f "${2:-$here/examples/models}")
 list=${BENCH_MODELS:-$(cd "$models" && ls *.step *.stp *.brep *.iges *.igs 2>/dev/null)}
 orders=${BENCH_ORDERS:-"2 3 5"}

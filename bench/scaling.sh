@@ -13,8 +13,7 @@
 set -u
 . "$(dirname "$0")/common.sh"
 need_time
-hocad=$(readlink -f "${1:-$here/build/hocad}")
-need_hocad "$hocad"
+use_hocad "${1:-}"
 gmsh=$(pick_gmsh "${2:-}")
 model=$(readlink -f "${3:-$here/examples/models/D150_aircraft_fused.brep}")
 sizes=${BENCH_SIZES:-"1.2 0.4 0.13 0.0906 0.042"}

@@ -13,8 +13,7 @@
 # SPDX-License-Identifier: GPL-2.0-or-later
 set -u
 . "$(dirname "$0")/common.sh"
-hocad=$(readlink -f "${1:-$here/build/hocad}")
-need_hocad "$hocad"
+use_hocad "${1:-}"
 gmsh=$(pick_gmsh "${2:-}")
 model=$(readlink -f "${3:-$here/examples/models/D150_aircraft_fused.brep}")
 h=${BENCH_SIZE:-0.0906}
