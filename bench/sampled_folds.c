@@ -24,7 +24,7 @@ typedef struct watch {
 
 static int progress(void *user, const hoc_optimize_iteration *it) {
   watch *w = user;
-  if (it->tangled == 0 && w->kept_sweep < it->iteration) {
+  if (it->tangled == 0) {
     hoc_mesh_destroy(&w->kept);
     if (hoc_mesh_copy(w->mesh, &w->kept) != HOC_OK) {
       w->failed = 1;
@@ -53,6 +53,8 @@ int main(int argc, char **argv) {
       hoc_mesh_generate_linear(model, &lo, &lin) != HOC_OK ||
       hoc_mesh_elevate(lin, p, HOC_NODES_EQUISPACED, &m) != HOC_OK) {
     fprintf(stderr, "%s\n", hoc_last_error());
+    hoc_mesh_destroy(&lin);
+    hoc_model_destroy(&model);
     return 1;
   }
   watch w = {m, NULL, 0, 0, 0};
@@ -72,8 +74,11 @@ int main(int argc, char **argv) {
     const hoc_quality_tables *t;
     double *normal = hoc_calloc(3 * w.kept->n_slots + 3, sizeof *normal);
     double *x = hoc_calloc(6 * (size_t)w.kept->np, sizeof *x);
-    if (!normal || !x || hoc_quality_tables_get(p, w.kept->nodeset, &t) != HOC_OK ||
-        hoc_mesh_slot_normals(w.kept, normal) != HOC_OK) {
+    if (!normal || !x) {
+      fprintf(stderr, "out of memory\n");
+      code = 1;
+    } else if (hoc_quality_tables_get(p, w.kept->nodeset, &t) != HOC_OK ||
+               hoc_mesh_slot_normals(w.kept, normal) != HOC_OK) {
       fprintf(stderr, "%s\n", hoc_last_error());
       code = 1;
     }
