@@ -121,6 +121,10 @@ typedef struct opt {
   double *fe, *qe;      /* [n_elems] objective part and q, as of the last sweep_start */
   double *hsize;        /* [n_nodes] local length: bound on one step's displacement */
   unsigned char *active;/* [n_nodes] */
+  unsigned char *near;  /* [n_nodes] within NEAR_RINGS elements of a tangled element ... */
+  unsigned char *near_e;/* [n_elems] (scratch of mark_near) */
+  int local;            /* ... and only blocks with such a node move (the exact phase while
+                           some element is tangled) */
   double min_gain;      /* per node: a step that lowers f by less puts the block to sleep */
   double eps;           /* regularisation scale of tangled elements (relative to their size) */
   int relax_uv;         /* second attempt: relaxed elements may fold in (u, v) too */
@@ -162,7 +166,7 @@ static void opt_free(opt *o) {
                o->fe,        o->qe,          o->hsize,   o->active,     o->moving,   o->step,
                o->alpha,     o->f0,          o->fnew,    o->slope,      o->state,    o->list,
                o->committed, o->tpar,        o->txyz,    o->tdz,        o->tslot_uv, o->tnormal,
-               o->xvalid};
+               o->xvalid,    o->near,        o->near_e};
   for (size_t i = 0; i < sizeof p / sizeof *p; ++i) free(p[i]);
 }
 
@@ -525,6 +529,8 @@ static hoc_status setup(opt *o, hoc_mesh *m, hoc_measure measure, int fix_curves
   memset(o->dirty, 1, ne);
   HOC_ALLOC(o->hsize, nn);
   HOC_ALLOC(o->active, nn);
+  HOC_ALLOC(o->near, nn);
+  HOC_ALLOC(o->near_e, ne);
   HOC_ALLOC(o->moving, nn);
   HOC_ALLOC(o->step, nd_total + 1);
   HOC_ALLOC(o->alpha, nb + 1);
@@ -1234,9 +1240,12 @@ static int near_tangled(const opt *o, size_t b) {
 }
 
 static int block_active(const opt *o, size_t b) {
-  for (size_t a = o->B->bn_start[b]; a < o->B->bn_start[b + 1]; ++a)
-    if (o->active[o->B->bn_node[a]]) return 1;
-  return 0;
+  int act = 0, near = !o->local;
+  for (size_t a = o->B->bn_start[b]; a < o->B->bn_start[b + 1]; ++a) {
+    act |= o->active[o->B->bn_node[a]];
+    near |= o->near[o->B->bn_node[a]];
+  }
+  return act && near;
 }
 
 /* Node k is active again: its blocks of both families go on their colours'
@@ -1251,6 +1260,28 @@ static void wake_node(opt *o, size_t k) {
     int c = B->block_color[b];
     B->queue_next[b] = B->queue_head[c];
     B->queue_head[c] = b;
+  }
+}
+
+/* While the exact phase untangles, only blocks within NEAR_RINGS rings of
+ * elements (sharing a node) of a tangled element move: its folds are few
+ * and local, and waking the whole mesh (every move wakes its neighbours
+ * while some element is tangled) made each of its sweeps test every element
+ * exactly many times over (the aircraft at order 10: 15-33 s a sweep). */
+#define NEAR_RINGS 3
+
+static void mark_near(opt *o) {
+  const hoc_mesh *m = o->m;
+  size_t ne = m->n_elems, np = (size_t)o->np;
+  for (size_t e = 0; e < ne; ++e) o->near_e[e] = !o->valid[e];
+  for (int r = 0; r <= NEAR_RINGS; ++r) {
+    memset(o->near, 0, m->n_nodes);
+    for (size_t e = 0; e < ne; ++e)
+      if (o->near_e[e])
+        for (size_t i = 0; i < np; ++i) o->near[m->conn[e * np + i]] = 1;
+    if (r == NEAR_RINGS) break;
+    for (size_t e = 0; e < ne; ++e)
+      for (size_t i = 0; i < np && !o->near_e[e]; ++i) o->near_e[e] = o->near[m->conn[e * np + i]];
   }
 }
 
@@ -1779,6 +1810,10 @@ sweeps:
       res.second_attempt = it;
     }
     size_t moved = 0;
+    int local = ctx.exact && tangled;
+    if (local) mark_near(&ctx);
+    else if (ctx.local) wake_all(&ctx); /* the nodes left awake elsewhere */
+    ctx.local = local;
     /* nodes near tangled elements and nodes of poor elements (q below half
      * the mean: those that set the mesh's worst quality) never sleep */
     double qmean = 0;
@@ -1963,6 +1998,8 @@ done:
   return status;
 }
 
+#define PROTECT_MAX_ORDER 5
+
 hoc_status hoc_mesh_optimize(hoc_mesh *mesh, const hoc_optimize_options *options,
                              hoc_optimize_result *result) {
   HOC_CHECK(mesh, HOC_ERR_ARGUMENT, "no mesh given");
@@ -1979,8 +2016,11 @@ hoc_status hoc_mesh_optimize(hoc_mesh *mesh, const hoc_optimize_options *options
    * folds on its way to better meshes (t20 at order 5: min q 0.49, 0.12
    * protected), but on gmsh's coarse meshes its folds between samples
    * outrun the exact phase (gmsh 5.0's order-3 bottle: 11 left, 7
-   * protected, and 0 after four splits). */
-  if (status == HOC_OK && a.tangled_final && !limited) {
+   * protected, and 0 after four splits). Not above order 5: there every
+   * trial of its first phase runs the exact tests, whose cost grows as
+   * p^4 (the aircraft at order 10: 15-33 s a sweep against 0.4-4 s for
+   * the samples), and `hocad` splits what is left anyway. */
+  if (status == HOC_OK && a.tangled_final && !limited && mesh->order <= PROTECT_MAX_ORDER) {
     status = snapshot_take(&first, mesh, a.tangled_final, a.objective_final);
     if (status == HOC_OK) {
       snapshot_restore(&start, mesh);
