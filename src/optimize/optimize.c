@@ -1266,8 +1266,8 @@ static void wake_node(opt *o, size_t k) {
 /* While the exact phase untangles, only blocks within NEAR_RINGS rings of
  * elements (sharing a node) of a tangled element move: its folds are few
  * and local, and waking the whole mesh (every move wakes its neighbours
- * while some element is tangled) made each of its sweeps test every element
- * exactly many times over (the aircraft at order 10: 15-33 s a sweep). */
+ * while some element is tangled) moves nodes far from any fold, each move
+ * testing its elements exactly. */
 #define NEAR_RINGS 3
 
 static void mark_near(opt *o) {
@@ -2018,8 +2018,8 @@ hoc_status hoc_mesh_optimize(hoc_mesh *mesh, const hoc_optimize_options *options
    * outrun the exact phase (gmsh 5.0's order-3 bottle: 11 left, 7
    * protected, and 0 after four splits). Not above order 5: there every
    * trial of its first phase runs the exact tests, whose cost grows as
-   * p^4 (the aircraft at order 10: 15-33 s a sweep against 0.4-4 s for
-   * the samples), and `hocad` splits what is left anyway. */
+   * p^4 (the aircraft at order 10: 8-24 s a sweep of the exact phase,
+   * 0.4-4 s of the first), and `hocad` splits what is left anyway. */
   if (status == HOC_OK && a.tangled_final && !limited && mesh->order <= PROTECT_MAX_ORDER) {
     status = snapshot_take(&first, mesh, a.tangled_final, a.objective_final);
     if (status == HOC_OK) {
