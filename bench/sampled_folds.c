@@ -35,7 +35,7 @@ static int progress(void *user, const hoc_optimize_iteration *it) {
     return 0;
   }
   /* a tangled sweep after an untangled one: the exact phase has begun */
-  return w->kept != NULL && it->tangled > 0;
+  return w->kept != NULL;
 }
 
 int main(int argc, char **argv) {
