@@ -258,9 +258,11 @@ typedef enum hoc_split_kind {
  *  keep all their nodes, and the children follow in their parent's place.
  *  Same order and node set as the input.
  *  @param[in]  elements  per-element flag (e.g. tangled from hoc_mesh_measure)
- *  @param[out] out       the new mesh (NULL on failure) */
+ *  @param[out] out       the new mesh (NULL on failure)
+ *  @param[out] pieces    NULL, or [elements of mesh]: how many elements of *out each
+ *                        element became (1: kept as it was; 2 to 4: split) */
 hoc_status hoc_mesh_split(const hoc_mesh *mesh, const unsigned char *elements, hoc_split_kind kind,
-                          hoc_mesh **out);
+                          hoc_mesh **out, unsigned char *pieces);
 
 /** A corner of an element at a CAD vertex where both of the element's
  *  edges lie on CAD curves that meet there at a small angle (a cusp of the
@@ -316,6 +318,12 @@ typedef struct hoc_optimize_options {
                              (0: 0.1) */
   hoc_optimize_progress_fn progress;
   void *progress_user;
+  const unsigned char *free_elements; /**< NULL: every node not on a CAD vertex may move;
+                             else [elements] flags: only the nodes of flagged elements, and
+                             of the elements within free_rings rings of them (sharing a
+                             node), move; the rest stay where they are (a local repair,
+                             e.g. of the elements a split made) */
+  int free_rings;       /**< see free_elements (0: only the flagged elements' nodes) */
 } hoc_optimize_options;
 
 void hoc_optimize_options_default(hoc_optimize_options *options);

@@ -231,11 +231,14 @@ static void test_split(hoc_split_kind kind) {
   if (!m) goto out;
   size_t ne = m->n_elems, np = (size_t)m->np;
   unsigned char *flag = calloc(ne, 1);
-  CHECK_STATUS(hoc_mesh_split(m, NULL, kind, &s), HOC_ERR_ARGUMENT);
-  CHECK_STATUS(hoc_mesh_split(m, flag, kind, NULL), HOC_ERR_ARGUMENT);
-  CHECK_STATUS(hoc_mesh_split(m, flag, (hoc_split_kind)7, &s), HOC_ERR_ARGUMENT);
+  CHECK_STATUS(hoc_mesh_split(m, NULL, kind, &s, NULL), HOC_ERR_ARGUMENT);
+  CHECK_STATUS(hoc_mesh_split(m, flag, kind, NULL, NULL), HOC_ERR_ARGUMENT);
+  CHECK_STATUS(hoc_mesh_split(m, flag, (hoc_split_kind)7, &s, NULL), HOC_ERR_ARGUMENT);
+  unsigned char *pieces = malloc(ne);
+  CHECK(flag && pieces);
+  if (!flag || !pieces) goto done;
   /* nothing flagged: the same mesh */
-  CHECK_OK(hoc_mesh_split(m, flag, kind, &s));
+  CHECK_OK(hoc_mesh_split(m, flag, kind, &s, NULL));
   if (s) {
     int same = s->n_elems == ne && s->n_nodes == m->n_nodes;
     for (size_t i = 0; same && i < ne * np; ++i)
@@ -245,7 +248,8 @@ static void test_split(hoc_split_kind kind) {
   hoc_mesh_destroy(&s);
   size_t flagged[2] = {0, ne / 2 + 5};
   flag[flagged[0]] = flag[flagged[1]] = 1;
-  CHECK_OK(hoc_mesh_split(m, flag, kind, &s));
+  memset(pieces, 0, ne);
+  CHECK_OK(hoc_mesh_split(m, flag, kind, &s, pieces));
   if (!s) goto done;
   if (!bisecting) CHECK(s->n_elems == ne + 2 * (3 + 3));
   /* (the grid has no curve lines: test_mesh_gmsh splits edges on curves) */
@@ -283,6 +287,7 @@ static void test_split(hoc_split_kind kind) {
     if (same) {
       ++kept;
       ++j;
+      wrong_kids += pieces[e] != 1;
       continue;
     }
     const double *P = m->elem_uv + 2 * e * np; /* corners 0..2 */
@@ -313,6 +318,7 @@ static void test_split(hoc_split_kind kind) {
       wrong_kids += n_kids < 2 || n_kids > 4 || (flag[e] && n_kids != 4);
     else
       wrong_kids += n_kids != (flag[e] ? 4u : 2u);
+    wrong_kids += pieces[e] != n_kids; /* as reported */
     if (flag[e] && !bisecting) { /* the first child: corner 0, then the midpoint of edge 0 */
       const double *C = s->elem_uv + 2 * first * np;
       double mid[2] = {0.5 * (P[0] + P[2]), 0.5 * (P[1] + P[3])};
@@ -339,6 +345,7 @@ static void test_split(hoc_split_kind kind) {
          bisecting ? "at longest edges" : "red-green", ne, s->n_elems, kept, bad, gap, st.min);
 done:
   free(flag);
+  free(pieces);
   hoc_mesh_destroy(&s);
 out:
   hoc_mesh_destroy(&m);

@@ -610,7 +610,7 @@ static void test_split_on_curves(void) {
     flag[e] = 1;
   for (int kind = 0; kind < 2; ++kind) {
     hoc_mesh_destroy(&s);
-    CHECK_OK(hoc_mesh_split(m, flag, (hoc_split_kind)kind, &s));
+    CHECK_OK(hoc_mesh_split(m, flag, (hoc_split_kind)kind, &s, NULL));
     if (s) check_split_lines(model, m, s);
   }
   free(flag);

@@ -266,6 +266,70 @@ static void check_polish(void) {
   hoc_model_destroy(&model);
 }
 
+/* free_elements: only the nodes of the flagged elements and of free_rings
+ * rings around them move, bit for bit; a fold inside that region opens, a
+ * fold outside it stays. */
+static void check_local(void) {
+  hoc_model *model = NULL;
+  hoc_mesh *lin = NULL, *m = NULL, *before = NULL;
+  torus_p3(3.0, 1.0, &model, &lin, &m);
+  if (!m) goto out;
+  size_t ne = m->n_elems, np = (size_t)m->np, nn = m->n_nodes;
+  tangle(m, (int)ne); /* element 0 only */
+  CHECK_OK(hoc_mesh_copy(m, &before));
+  unsigned char *flag = calloc(ne, 1), *ring = calloc(ne, 1), *mine = calloc(nn, 1);
+  if (!flag || !ring || !mine || !before) goto done;
+  /* the region: element 0, and (one ring) every element sharing a node with it */
+  flag[0] = 1;
+  for (size_t k = 0; k < np; ++k) mine[m->conn[k]] = 1;
+  for (size_t e = 0; e < ne; ++e)
+    for (size_t k = 0; k < np; ++k) ring[e] |= mine[m->conn[e * np + k]];
+  memset(mine, 0, nn);
+  for (size_t e = 0; e < ne; ++e)
+    for (size_t k = 0; k < np && ring[e]; ++k) mine[m->conn[e * np + k]] = 1;
+  hoc_optimize_options oo;
+  hoc_optimize_options_default(&oo);
+  oo.free_elements = flag;
+  oo.free_rings = -1;
+  hoc_optimize_result r;
+  CHECK_STATUS(hoc_mesh_optimize(m, &oo, &r), HOC_ERR_ARGUMENT);
+  oo.free_rings = 1;
+  CHECK_OK(hoc_mesh_optimize(m, &oo, &r));
+  hoc_quality_stats st;
+  CHECK_OK(hoc_mesh_measure(m, HOC_MEASURE_SHAPE, NULL, NULL, &st));
+  size_t moved_out = 0, moved_in = 0;
+  for (size_t i = 0; i < nn; ++i) {
+    int same = !memcmp(m->param + 2 * i, before->param + 2 * i, 2 * sizeof(double)) &&
+               !memcmp(m->xyz + 3 * i, before->xyz + 3 * i, 3 * sizeof(double));
+    if (mine[i]) moved_in += !same;
+    else moved_out += !same;
+  }
+  printf("local: %zu tangled -> %zu, %zu nodes moved in the region, %zu outside it\n",
+         r.tangled_initial, st.tangled, moved_in, moved_out);
+  CHECK(r.tangled_initial > 0 && st.tangled == 0 && r.tangled_final == 0);
+  CHECK(moved_in > 0 && moved_out == 0);
+  /* a region away from the fold (the element farthest in the list, no
+   * rings): the fold stays */
+  hoc_mesh_destroy(&m);
+  CHECK_OK(hoc_mesh_copy(before, &m));
+  if (!m) goto done;
+  memset(flag, 0, ne);
+  flag[ne / 2] = 1;
+  oo.free_rings = 0;
+  CHECK_OK(hoc_mesh_optimize(m, &oo, &r));
+  CHECK_OK(hoc_mesh_measure(m, HOC_MEASURE_SHAPE, NULL, NULL, &st));
+  CHECK(st.tangled > 0 && r.tangled_final > 0);
+done:
+  free(flag);
+  free(ring);
+  free(mine);
+out:
+  hoc_mesh_destroy(&before);
+  hoc_mesh_destroy(&m);
+  hoc_mesh_destroy(&lin);
+  hoc_model_destroy(&model);
+}
+
 int main(void) {
   check_kind(HOC_ANALYTIC_SPHERE, 1.0, 0, 16, 8, 3);
   check_kind(HOC_ANALYTIC_CYLINDER, 1.0, 2.0, 12, 4, 3);
@@ -275,5 +339,6 @@ int main(void) {
   check_threads();
   check_second_attempt();
   check_polish();
+  check_local();
   return test_report();
 }

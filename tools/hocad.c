@@ -620,7 +620,20 @@ static int iteration_line(void *user, const hoc_optimize_iteration *it) {
   return 0;
 }
 
-static int optimize_stage(const options *o, report *r, hoc_mesh *mesh) {
+/* From this order on, a split of an optimised mesh is optimised locally:
+ * only the nodes of the split's children and of LOCAL_RINGS rings of
+ * elements around them move (the rest of the mesh is where the first
+ * optimisation left it). Below it the whole mesh is optimised again, which
+ * costs little there (orders 2, 3, 5 and gmsh's order-3 meshes were
+ * measured so); at order 10 that took as long as the first optimisation,
+ * each split. */
+#define LOCAL_MIN_ORDER 6
+#define LOCAL_RINGS 2
+
+/* free: NULL, or the elements whose nodes (and those of LOCAL_RINGS rings
+ * around them) alone may move. */
+static int optimize_stage(const options *o, report *r, hoc_mesh *mesh,
+                          const unsigned char *free) {
   if (o->check_gradient) {
     double err;
     hoc_status st = hoc_mesh_check_gradient(mesh, o->measure, o->fix_curves, 200, &err);
@@ -636,6 +649,8 @@ static int optimize_stage(const options *o, report *r, hoc_mesh *mesh) {
   if (o->max_iterations) oo.max_iterations = o->max_iterations;
   oo.progress = iteration_line;
   oo.progress_user = (void *)o;
+  oo.free_elements = free;
+  oo.free_rings = LOCAL_RINGS;
   progress(o, "optimizing %zu elements", hoc_mesh_num_elements(mesh));
   hoc_optimize_result res;
   double t0 = now();
@@ -841,10 +856,28 @@ static int split_tangled(const options *o, report *r, int n_keep, hoc_split_kind
     return EXIT_FAILURE_;
   }
   double t0 = now();
-  hoc_status st = hoc_mesh_measure(mesh, o->measure, NULL, tangled, NULL);
-  if (st == HOC_OK) st = hoc_mesh_split(base ? base : mesh, tangled, kind, fine);
+  /* above LOCAL_MIN_ORDER, a split of the optimised mesh is optimised
+   * locally: its children and LOCAL_RINGS rings around them */
+  int local = !base && hoc_mesh_order(mesh) >= LOCAL_MIN_ORDER;
+  unsigned char *pieces = local ? calloc(ne ? ne : 1, 1) : NULL, *children = NULL;
+  hoc_status st = local && !pieces ? HOC_ERR_MEMORY : HOC_OK;
+  if (st == HOC_OK) st = hoc_mesh_measure(mesh, o->measure, NULL, tangled, NULL);
+  if (st == HOC_OK) st = hoc_mesh_split(base ? base : mesh, tangled, kind, fine, pieces);
+  if (st == HOC_OK && local) {
+    size_t nf = hoc_mesh_num_elements(*fine), j = 0;
+    if (!(children = calloc(nf ? nf : 1, 1))) st = HOC_ERR_MEMORY;
+    for (size_t e = 0; e < ne && children; j += pieces[e++])
+      for (size_t c = j; c < j + pieces[e] && c < nf; ++c) children[c] = pieces[e] > 1;
+  }
+  free(pieces);
   if (st != HOC_OK) {
     free(tangled);
+    free(children);
+    hoc_mesh_destroy(fine);
+    if (st == HOC_ERR_MEMORY) {
+      error_line("out of memory");
+      return EXIT_FAILURE_;
+    }
     return fail(st, 0);
   }
   for (size_t e = 0; e < ne; ++e)
@@ -862,7 +895,8 @@ static int split_tangled(const options *o, report *r, int n_keep, hoc_split_kind
   r->n = n_keep; /* the stages before the optimisation stay */
   int code = measure_stage(o, r, "split", *fine, now() - t0, NULL);
   if (!code && fine_start && (st = hoc_mesh_copy(*fine, fine_start)) != HOC_OK) code = fail(st, 0);
-  if (!code) code = optimize_stage(o, r, *fine);
+  if (!code) code = optimize_stage(o, r, *fine, children);
+  free(children);
   if (code) {
     hoc_mesh_destroy(fine);
     if (fine_start) hoc_mesh_destroy(fine_start);
@@ -1141,7 +1175,7 @@ static int cmd_mesh(int argc, char **argv) {
         code = fail(st, 0);
         goto done;
       }
-      if ((code = optimize_stage(&o, &r, ho))) goto done;
+      if ((code = optimize_stage(&o, &r, ho, NULL))) goto done;
     }
     /* elements left tangled: their faces meshed again finer, from the
      * start; in a given linear mesh, or once the remeshing is spent, the
@@ -1334,7 +1368,7 @@ static int replace_nodes(const options *o, report *r, const hoc_mesh *mesh, hoc_
 static int optimize_keep_start(const options *o, report *r, hoc_mesh *mesh, hoc_mesh **start) {
   hoc_status st;
   if (start && (st = hoc_mesh_copy(mesh, start)) != HOC_OK) return fail(st, 0);
-  int code = optimize_stage(o, r, mesh);
+  int code = optimize_stage(o, r, mesh, NULL);
   if (code && start) hoc_mesh_destroy(start);
   return code;
 }

@@ -181,7 +181,7 @@ static int longest_edge(const hoc_mesh *m, size_t e) {
 }
 
 hoc_status hoc_mesh_split(const hoc_mesh *mesh, const unsigned char *elements, hoc_split_kind kind,
-                          hoc_mesh **out) {
+                          hoc_mesh **out, unsigned char *pieces) {
   HOC_CHECK(out, HOC_ERR_ARGUMENT, "mesh output is NULL");
   *out = NULL;
   HOC_CHECK(mesh && elements, HOC_ERR_ARGUMENT, "no mesh or no element flags");
@@ -297,6 +297,7 @@ hoc_status hoc_mesh_split(const hoc_mesh *mesh, const unsigned char *elements, h
       md[k] = marked[id] ? mid[id] : SIZE_MAX;
       if (marked[id]) cnt++, one = k;
     }
+    if (pieces) pieces[e] = (unsigned char)(cnt == 0 ? 1 : bisecting ? cnt + 1 : cnt == 3 ? 4 : 2);
     if (cnt == 0) {
       memcpy(conn + ce * (size_t)np, cn, (size_t)np * sizeof *conn);
       eface[ce++] = m->elem_face[e];

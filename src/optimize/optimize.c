@@ -125,6 +125,8 @@ typedef struct opt {
   unsigned char *near_e;/* [n_elems] (scratch of mark_near) */
   int local;            /* ... and only blocks with such a node move (the exact phase while
                            some element is tangled) */
+  unsigned char *touched; /* [n_elems] has a node that may move (NULL: no node is held by
+                             hoc_optimize_options.free_elements) */
   double min_gain;      /* per node: a step that lowers f by less puts the block to sleep */
   double eps;           /* regularisation scale of tangled elements (relative to their size) */
   int relax_uv;         /* second attempt: relaxed elements may fold in (u, v) too */
@@ -166,7 +168,7 @@ static void opt_free(opt *o) {
                o->fe,        o->qe,          o->hsize,   o->active,     o->moving,   o->step,
                o->alpha,     o->f0,          o->fnew,    o->slope,      o->state,    o->list,
                o->committed, o->tpar,        o->txyz,    o->tdz,        o->tslot_uv, o->tnormal,
-               o->xvalid,    o->near,        o->near_e};
+               o->xvalid,    o->near,        o->near_e,  o->touched};
   for (size_t i = 0; i < sizeof p / sizeof *p; ++i) free(p[i]);
 }
 
@@ -458,7 +460,48 @@ done:
   return status;
 }
 
-static hoc_status setup(opt *o, hoc_mesh *m, hoc_measure measure, int fix_curves) {
+/* Only the nodes of flagged elements and of those within `rings` rings of
+ * them (sharing a node) keep their unknowns. */
+static hoc_status restrict_free(opt *o, const unsigned char *flagged, int rings) {
+  const hoc_mesh *m = o->m;
+  size_t ne = m->n_elems, nn = m->n_nodes, np = (size_t)o->np;
+  unsigned char *elem = hoc_calloc(ne + 1, 1), *node = hoc_calloc(nn + 1, 1);
+  if (!elem || !node) {
+    free(elem);
+    free(node);
+    return HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
+  }
+  memcpy(elem, flagged, ne);
+  for (int r = 0;; ++r) {
+    for (size_t e = 0; e < ne; ++e)
+      if (elem[e])
+        for (size_t k = 0; k < np; ++k) node[m->conn[e * np + k]] = 1;
+    if (r >= rings) break;
+    for (size_t e = 0; e < ne; ++e)
+      for (size_t k = 0; k < np && !elem[e]; ++k) elem[e] = node[m->conn[e * np + k]];
+  }
+  for (size_t i = 0; i < nn; ++i)
+    if (!node[i]) o->ndof[i] = 0;
+  memset(elem, 0, ne);
+  for (size_t e = 0; e < ne; ++e)
+    for (size_t k = 0; k < np && !elem[e]; ++k) elem[e] = o->ndof[m->conn[e * np + k]] > 0;
+  o->touched = elem;
+  free(node);
+  return HOC_OK;
+}
+
+/* The part of f the free nodes can change (all of it without
+ * free_elements): the stopping rules' measure of progress. */
+static double free_objective(const opt *o, double f) {
+  if (!o->touched) return f;
+  double fl = 0;
+  for (size_t e = 0; e < o->m->n_elems; ++e)
+    if (o->touched[e]) fl += o->fe[e];
+  return fl;
+}
+
+static hoc_status setup(opt *o, hoc_mesh *m, hoc_measure measure, int fix_curves,
+                        const unsigned char *free_elements, int free_rings) {
   memset(o, 0, sizeof *o);
   o->m = m;
   o->model = m->model;
@@ -500,6 +543,7 @@ static hoc_status setup(opt *o, hoc_mesh *m, hoc_measure measure, int fix_curves
     else if (m->dim[i] == HOC_ON_CURVE && !fix_curves && !m->model->curves[m->entity[i]].degenerate)
       o->ndof[i] = 1;
   }
+  if (free_elements) HOC_TRY(restrict_free(o, free_elements, free_rings));
   /* the two families at once (each fills only its own blockset) */
   hoc_par_error err = {0};
 #pragma omp parallel for schedule(static, 1) num_threads(2) if (omp_get_max_threads() > 1)
@@ -948,7 +992,7 @@ static hoc_status screen(opt *o) {
     double *n = x ? x + 3 * np : NULL, *r = x ? x + 6 * np : NULL, *J = r ? r + nr_max : NULL;
 #pragma omp for schedule(static)
     for (size_t e = 0; e < ne; ++e) {
-      if (!x) continue;
+      if (!x || (o->touched && !o->touched[e])) continue; /* (no free node reads it) */
       gather(o, e, x, n);
       int nr = elem_residuals(o, e, x, n, r, J, NULL);
       const size_t *cn = m->conn + e * np;
@@ -1713,7 +1757,7 @@ hoc_status hoc_mesh_polish(hoc_mesh *mesh, hoc_measure measure, int fix_curves, 
   double f, qmin;
   size_t before = 0, after = 0;
   hoc_status status = hoc_mesh_update_xyz(mesh);
-  if (status == HOC_OK) status = setup(&ctx, mesh, measure, fix_curves);
+  if (status == HOC_OK) status = setup(&ctx, mesh, measure, fix_curves, NULL, 0);
   if (status == HOC_OK) status = eval_all(&ctx);
   ctx.exact = 1;
   if (status == HOC_OK) status = sweep_start(&ctx, &f, &qmin, &before);
@@ -1739,6 +1783,7 @@ static hoc_status optimize_run(hoc_mesh *mesh, const hoc_optimize_options *optio
             "unknown distortion measure %d", (int)o.measure);
   HOC_CHECK(o.max_iterations <= 1000000, HOC_ERR_ARGUMENT, "too many iterations requested");
   HOC_CHECK(isfinite(o.tolerance), HOC_ERR_ARGUMENT, "tolerance must be a finite number");
+  HOC_CHECK(o.free_rings >= 0, HOC_ERR_ARGUMENT, "free_rings must not be negative");
   opt ctx = {0};
   scratch *scr = NULL;
   int nthreads = omp_get_max_threads();
@@ -1746,7 +1791,8 @@ static hoc_status optimize_run(hoc_mesh *mesh, const hoc_optimize_options *optio
    * nodes off the surface) */
   hoc_status status = hoc_mesh_update_xyz(mesh);
   if (status == HOC_OK) mesh->off_cad = 0;
-  if (status == HOC_OK) status = setup(&ctx, mesh, o.measure, o.fix_curves);
+  if (status == HOC_OK)
+    status = setup(&ctx, mesh, o.measure, o.fix_curves, o.free_elements, o.free_rings);
   ctx.protect = protect; /* (setup clears ctx) */
   if (status == HOC_OK) status = eval_all(&ctx);
   if (status == HOC_OK) status = scratch_alloc(&ctx, nthreads, &scr);
@@ -1827,7 +1873,8 @@ sweeps:
         }
     /* a step worth less than a small share of the average node's part of f
      * puts its block to sleep */
-    ctx.min_gain = o.tolerance * f / (double)(res.free_nodes ? res.free_nodes : 1);
+    ctx.min_gain =
+        o.tolerance * free_objective(&ctx, f) / (double)(res.free_nodes ? res.free_nodes : 1);
     /* while untangling, every move wakes its neighbourhood (room is made by
      * moving nodes further out); then only significant ones do */
     ctx.wake_factor = tangled ? 1 : 10;
@@ -1908,11 +1955,11 @@ sweeps:
      * less than 5% and the worst element gained less than 0.005 (compared
      * with a tangled sweep, f is regularised and q is 0: no measure of
      * progress) */
-    hist_f[it % 11] = f;
+    hist_f[it % 11] = free_objective(&ctx, f);
     hist_q[it % 11] = qmin;
     if (tangled) since = it;
     if (tangled == 0 && it - since > 10 &&
-        hist_f[(it - 10) % 11] - f < 0.05 * hist_f[(it - 10) % 11] &&
+        hist_f[(it - 10) % 11] - hist_f[it % 11] < 0.05 * hist_f[(it - 10) % 11] &&
         qmin - hist_q[(it - 10) % 11] < 0.005) {
       res.converged = 1;
       break;
@@ -2080,7 +2127,7 @@ hoc_status hoc_mesh_check_gradient(hoc_mesh *mesh, hoc_measure measure, int fix_
   HOC_CHECK(samples > 0, HOC_ERR_ARGUMENT, "need at least one sample");
   opt ctx = {0};
   scratch *scr = NULL;
-  hoc_status status = setup(&ctx, mesh, measure, fix_curves);
+  hoc_status status = setup(&ctx, mesh, measure, fix_curves, NULL, 0);
   if (status == HOC_OK) status = eval_all(&ctx);
   if (status == HOC_OK) status = scratch_alloc(&ctx, 1, &scr);
   if (status != HOC_OK) {
