@@ -97,6 +97,7 @@ if "$build/gmsh_ho_mesh" "$bottle" 3 g48.msh 2> /dev/null; then
   code=$?
   n_split=$(grep -o '"refinements": [0-9]*' g1.json | cut -d' ' -f2)
   ok "splits said and counted (${n_split:-none})" "[ '$n_split' = 2 ] && [ \$(grep -c 'splitting them' g1err.txt) -eq 2 ]"
+  ok "order 3: each split optimised whole" "[ \$(grep -c 'optimising the mesh again' g1err.txt) -eq 2 ]"
   t_out=$(grep -o '"name": "optimized"[^}]*' g1.json | grep -o '"tangled": [0-9]*' | cut -d' ' -f2)
   e_out=$(grep -o '"name": "optimized"[^}]*' g1.json | grep -o '"elements": [0-9]*' | cut -d' ' -f2)
   ok "tangled left (${t_out:-none}): exit 5" "[ $code -eq 5 ] && [ '$t_out' -gt 0 ]"
@@ -121,6 +122,14 @@ if "$build/gmsh_ho_mesh" "$bottle" 3 g48.msh 2> /dev/null; then
 else
   ok "gmsh 4.8 meshes the bottle" "false"
 fi
+# from order 6 on, a split of the optimised mesh is optimised locally (its
+# new elements and two rings around them): one sweep leaves t20 tangled at
+# order 6, and both chains split it (a given linear mesh: no remeshing)
+"$hocad" mesh "$model" --order 1 -o t20_lin.msh -q > /dev/null 2>&1
+"$hocad" mesh "$model" --linear t20_lin.msh --order 6 --max-iterations 1 --refinements 1 \
+  --no-output --json l6.json > /dev/null 2> l6err.txt
+code=$?
+ok "order 6: splits optimised locally, exit 5" "[ $code -eq 5 ] && [ \$(grep -c 'optimising the new elements and two rings around them again' l6err.txt) -eq 2 ] && grep -q '\"refinements\": 2,' l6.json"
 # no temporary files left behind
 ok "no temporaries" "[ -z \"\$(ls -A | grep tmp- || true)\" ]"
 echo "$pass passed, $fail failed"

@@ -886,9 +886,10 @@ static int split_tangled(const options *o, report *r, int n_keep, hoc_split_kind
   if (!o->quiet) {
     fprintf(stderr,
             "%s: %zu element(s) still tangled; splitting them and their neighbours %s (%zu -> "
-            "%zu elements) and optimising again (refinement %d): faces",
+            "%zu elements) and optimising %s again (refinement %d): faces",
             program, total, kind == HOC_SPLIT_RED_GREEN ? "red-green" : "at their longest edges",
-            ne, hoc_mesh_num_elements(*fine), r->refinements);
+            ne, hoc_mesh_num_elements(*fine),
+            local ? "the new elements and two rings around them" : "the mesh", r->refinements);
     print_faces(mesh, tangled);
   }
   free(tangled);
