@@ -856,7 +856,7 @@ static int split_tangled(const options *o, report *r, int n_keep, hoc_split_kind
     return EXIT_FAILURE_;
   }
   double t0 = now();
-  /* above LOCAL_MIN_ORDER, a split of the optimised mesh is optimised
+  /* from LOCAL_MIN_ORDER on, a split of the optimised mesh is optimised
    * locally: its children and LOCAL_RINGS rings around them */
   int local = !base && hoc_mesh_order(mesh) >= LOCAL_MIN_ORDER;
   unsigned char *pieces = local ? calloc(ne ? ne : 1, 1) : NULL, *children = NULL;
