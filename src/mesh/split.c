@@ -283,7 +283,9 @@ hoc_status hoc_mesh_split(const hoc_mesh *mesh, const unsigned char *elements, h
   size_t n_new_elems = 0;
   for (size_t e = 0; e < ne; ++e) {
     int cnt = marked[edge_of[3 * e]] + marked[edge_of[3 * e + 1]] + marked[edge_of[3 * e + 2]];
-    n_new_elems += cnt == 0 ? 1 : bisecting ? (size_t)cnt + 1 : cnt == 3 ? 4 : 2;
+    int n = cnt == 0 ? 1 : bisecting ? cnt + 1 : cnt == 3 ? 4 : 2;
+    if (pieces) pieces[e] = (unsigned char)n;
+    n_new_elems += (size_t)n;
   }
   HOC_ALLOC_GOTO(conn, n_new_elems * (size_t)np + 1, done);
   HOC_ALLOC_GOTO(eface, n_new_elems + 1, done);
@@ -297,7 +299,6 @@ hoc_status hoc_mesh_split(const hoc_mesh *mesh, const unsigned char *elements, h
       md[k] = marked[id] ? mid[id] : SIZE_MAX;
       if (marked[id]) cnt++, one = k;
     }
-    if (pieces) pieces[e] = (unsigned char)(cnt == 0 ? 1 : bisecting ? cnt + 1 : cnt == 3 ? 4 : 2);
     if (cnt == 0) {
       memcpy(conn + ce * (size_t)np, cn, (size_t)np * sizeof *conn);
       eface[ce++] = m->elem_face[e];

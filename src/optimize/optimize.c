@@ -460,6 +460,21 @@ done:
   return status;
 }
 
+/* elem[ne] grown by `rings` rings of elements (sharing a node); node[nn]
+ * becomes the nodes of the grown set. */
+static void grow_rings(const hoc_mesh *m, unsigned char *elem, unsigned char *node, int rings) {
+  size_t ne = m->n_elems, np = (size_t)m->np;
+  memset(node, 0, m->n_nodes);
+  for (int r = 0;; ++r) {
+    for (size_t e = 0; e < ne; ++e)
+      if (elem[e])
+        for (size_t k = 0; k < np; ++k) node[m->conn[e * np + k]] = 1;
+    if (r >= rings) break;
+    for (size_t e = 0; e < ne; ++e)
+      for (size_t k = 0; k < np && !elem[e]; ++k) elem[e] = node[m->conn[e * np + k]];
+  }
+}
+
 /* Only the nodes of flagged elements and of those within `rings` rings of
  * them (sharing a node) keep their unknowns. */
 static hoc_status restrict_free(opt *o, const unsigned char *flagged, int rings) {
@@ -472,14 +487,7 @@ static hoc_status restrict_free(opt *o, const unsigned char *flagged, int rings)
     return HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
   }
   memcpy(elem, flagged, ne);
-  for (int r = 0;; ++r) {
-    for (size_t e = 0; e < ne; ++e)
-      if (elem[e])
-        for (size_t k = 0; k < np; ++k) node[m->conn[e * np + k]] = 1;
-    if (r >= rings) break;
-    for (size_t e = 0; e < ne; ++e)
-      for (size_t k = 0; k < np && !elem[e]; ++k) elem[e] = node[m->conn[e * np + k]];
-  }
+  grow_rings(m, elem, node, rings);
   for (size_t i = 0; i < nn; ++i)
     if (!node[i]) o->ndof[i] = 0;
   memset(elem, 0, ne);
@@ -1315,18 +1323,8 @@ static void wake_node(opt *o, size_t k) {
 #define NEAR_RINGS 3
 
 static void mark_near(opt *o) {
-  const hoc_mesh *m = o->m;
-  size_t ne = m->n_elems, np = (size_t)o->np;
-  for (size_t e = 0; e < ne; ++e) o->near_e[e] = !o->valid[e];
-  for (int r = 0; r <= NEAR_RINGS; ++r) {
-    memset(o->near, 0, m->n_nodes);
-    for (size_t e = 0; e < ne; ++e)
-      if (o->near_e[e])
-        for (size_t i = 0; i < np; ++i) o->near[m->conn[e * np + i]] = 1;
-    if (r == NEAR_RINGS) break;
-    for (size_t e = 0; e < ne; ++e)
-      for (size_t i = 0; i < np && !o->near_e[e]; ++i) o->near_e[e] = o->near[m->conn[e * np + i]];
-  }
+  for (size_t e = 0; e < o->m->n_elems; ++e) o->near_e[e] = !o->valid[e];
+  grow_rings(o->m, o->near_e, o->near, NEAR_RINGS);
 }
 
 /* Every block may be active (after a change of every node's flag). */
