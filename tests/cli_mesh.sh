@@ -130,6 +130,14 @@ fi
   --no-output --json l6.json > /dev/null 2> l6err.txt
 code=$?
 ok "order 6: splits optimised locally, exit 5" "[ $code -eq 5 ] && [ \$(grep -c 'optimising the new elements and two rings around them again' l6err.txt) -eq 2 ] && grep -q '\"refinements\": 2,' l6.json"
+# a remeshing lowers the minimum size ten times, unless that more than
+# quadruples the mesh: the bottle's curvature sizing at 8 elements per 2 pi
+# then makes 21 192 elements from 4 566, and the faces are meshed again
+# with the minimum size they had
+"$hocad" mesh "$bottle" --order 3 --size 40 --curvature 8 --max-iterations 1 --refinements 1 \
+  --no-output --json rm.json > /dev/null 2> rmerr.txt
+code=$?
+ok "remeshing: minimum size kept when lowering it quadruples the mesh" "[ $code -eq 5 ] && grep -q 'more than four times the 4566 before: meshing them again with the minimum size 4\$' rmerr.txt && grep -q '\"remeshings\": 1,' rm.json && grep -q '\"elements\": 4674,' rm.json"
 # no temporary files left behind
 ok "no temporaries" "[ -z \"\$(ls -A | grep tmp- || true)\" ]"
 echo "$pass passed, $fail failed"

@@ -246,8 +246,9 @@ static const char *usage_mesh =
     "  --refinements N      if elements stay tangled, split them as 'hocad optimize'\n"
     "                       does (kept if that leaves none tangled), else mesh\n"
     "                       their faces again with edges half as long (and,\n"
-    "                       without --size-min, a minimum size ten times smaller)\n"
-    "                       and start again, at most N times (default 2), then\n"
+    "                       without --size-min, a minimum size ten times smaller\n"
+    "                       unless that more than quadruples the mesh) and\n"
+    "                       start again, at most N times (default 2), then\n"
     "                       split, N times per chain (with --linear only the\n"
     "                       splits, default 3)\n" OPTIMIZE_OPTIONS
     "  -o, --output F.msh   gmsh MSH 4.1 output (default: MODEL-NAME_pP.msh here;\n"
@@ -1126,6 +1127,10 @@ static int cmd_mesh(int argc, char **argv) {
   lo.curvature = o.curvature;
   lo.order = o.order;
   const hoc_mesh *final = NULL;
+  /* the minimum size before a remeshing lowered it, and the elements of
+   * the linear mesh before that remeshing */
+  double unlowered_min = lo.size_min;
+  size_t prev_elements = 0;
   for (;;) {
     lo.face_size = face_size;
     t0 = now();
@@ -1143,6 +1148,22 @@ static int cmd_mesh(int argc, char **argv) {
     } else {
       progress(&o, "meshing %d faces", hoc_model_num_faces(model));
       st = hoc_mesh_generate_linear(model, &lo, &lin);
+      /* the lowered minimum lets the curvature sizing go finer on every
+       * face, not only on those meshed again (the aircraft at order 7:
+       * 192 990 elements from 7 818); halving the edges of every face
+       * would at most quadruple the mesh, so beyond that it is undone */
+      if (st == HOC_OK && lo.size_min < unlowered_min &&
+          hoc_mesh_num_elements(lin) > 4 * prev_elements) {
+        if (!o.quiet)
+          fprintf(stderr,
+                  "%s: note: with the minimum size %g the faces made %zu elements, more than "
+                  "four times the %zu before: meshing them again with the minimum size %g\n",
+                  program, lo.size_min, hoc_mesh_num_elements(lin), prev_elements,
+                  unlowered_min);
+        hoc_mesh_destroy(&lin);
+        lo.size_min = unlowered_min;
+        st = hoc_mesh_generate_linear(model, &lo, &lin);
+      }
     }
     if (st != HOC_OK) {
       code = fail(st, 1);
@@ -1216,9 +1237,11 @@ static int cmd_mesh(int argc, char **argv) {
     /* and unless --size-min was given, let the curvature sizing go ten
      * times finer (the bottle's thread curls through 130 degrees within
      * 0.03 at its end, where the default minimum of 0.4 kept it coarse) */
+    prev_elements = hoc_mesh_num_elements(lin);
     if (!(o.size_min > 0)) {
       double size_max, size_min;
       hoc_linear_sizes(model, &lo, &size_max, &size_min);
+      unlowered_min = size_min;
       lo.size_min = size_min / 10;
     }
     if (!kept_ho || attempt_r.stages[attempt_r.n - 1].stats.tangled <
