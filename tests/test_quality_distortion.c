@@ -226,16 +226,16 @@ static void test_gradients(void) {
       }
       for (int meas = 0; meas < 2; ++meas) {
         double delta = trial >= 3 ? 0.05 : (trial == 2 ? 1e-3 : 0.0);
-        double smin = hoc_element_residuals(t, (hoc_measure)meas, x, n, delta, r, J);
+        double smin = hoc_element_residuals(t, (hoc_measure)meas, x, n, delta, NULL, r, J);
         if (delta == 0 && !(smin > 0)) continue;
         double err = 0, scale = 0;
         for (size_t i = 0; i < np; ++i)
           for (int k = 0; k < 3; ++k) {
             double h = 1e-6, save = x[3 * i + k];
             x[3 * i + k] = save + h;
-            hoc_element_residuals(t, (hoc_measure)meas, x, n, delta, rp, NULL);
+            hoc_element_residuals(t, (hoc_measure)meas, x, n, delta, NULL, rp, NULL);
             x[3 * i + k] = save - h;
-            hoc_element_residuals(t, (hoc_measure)meas, x, n, delta, rm, NULL);
+            hoc_element_residuals(t, (hoc_measure)meas, x, n, delta, NULL, rm, NULL);
             x[3 * i + k] = save;
             for (size_t q = 0; q < nq; ++q) {
               double fd = (rp[q] - rm[q]) / (2 * h), an = J[(q * np + i) * 3 + k];
@@ -247,6 +247,25 @@ static void test_gradients(void) {
         if (!(err <= 1e-6 * (1 + scale)))
           fprintf(stderr, "  p=%d measure=%d delta=%g: gradient error %g (scale %g)\n", p, meas,
                   delta, err, scale);
+        /* with a mask: the same residuals and wanted columns, bit for bit,
+         * and the other columns not written */
+        unsigned char *need = calloc(np, 1);
+        double *Jm = calloc(nq * np * 3, sizeof *Jm);
+        for (size_t i = 0; i < np; ++i) need[i] = (unsigned char)(i % 3 == (size_t)trial % 3);
+        for (size_t k = 0; k < nq * np * 3; ++k) Jm[k] = -7.5;
+        hoc_element_residuals(t, (hoc_measure)meas, x, n, delta, need, rp, Jm);
+        int same = 1;
+        for (size_t q = 0; q < nq; ++q) {
+          same &= memcmp(&rp[q], &r[q], sizeof *r) == 0;
+          for (size_t i = 0; i < np; ++i)
+            for (int k = 0; k < 3; ++k) {
+              size_t at = (q * np + i) * 3 + (size_t)k;
+              same &= need[i] ? memcmp(&Jm[at], &J[at], sizeof *J) == 0 : Jm[at] == -7.5;
+            }
+        }
+        CHECK(same);
+        free(need);
+        free(Jm);
       }
     }
     free(x);

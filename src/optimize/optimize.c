@@ -151,6 +151,9 @@ typedef struct opt {
 
 typedef struct scratch {
   double *x, *n, *r, *J, *uv, *Jz, *H, *g, *L;
+  double *w;         /* [np] block_model: a node's weight in the block, */
+  int *off;          /* its first unknown, */
+  unsigned char *nd; /* and its unknowns (0: not moved by the block) */
 } scratch;
 
 static void opt_free(opt *o) {
@@ -751,13 +754,13 @@ static void sigma_stats(const opt *o, const double *x, const double *n, double *
  * asks det > 0 there too). r: [nq + np + nv], J: [nq + np + nv][np][3] or
  * NULL. Returns the count and sets
  * *smin to the smallest sigma / |D phi|^2 over the quadrature points. */
-static int elem_residuals(const opt *o, size_t e, const double *x, const double *n, double *r,
-                          double *J, double *smin) {
+static int elem_residuals(const opt *o, size_t e, const double *x, const double *n,
+                          const unsigned char *need, double *r, double *J, double *smin) {
   int nq = o->nq, np = o->np;
-  double s = hoc_element_residuals(o->t, o->measure, x, n, o->delta[e], r, J);
+  double s = hoc_element_residuals(o->t, o->measure, x, n, o->delta[e], need, r, J);
   if (smin) *smin = s;
   if (!o->region[e]) return nq;
-  hoc_element_node_residuals(o->t, o->measure, x, n, o->delta[e], o->exact, r + nq,
+  hoc_element_node_residuals(o->t, o->measure, x, n, o->delta[e], o->exact, need, r + nq,
                              J ? J + 3 * (size_t)nq * (size_t)np : NULL);
   return nq + hoc_element_node_points(o->t, o->exact);
 }
@@ -830,7 +833,7 @@ static hoc_status sweep_start(opt *o, double *objective, double *min_q, size_t *
       if (!x || !(o->dirty[e] || o->region[e] || o->was_region[e])) continue;
       gather(o, e, x, n);
       double f = 0;
-      int nr = elem_residuals(o, e, x, n, r, NULL, NULL);
+      int nr = elem_residuals(o, e, x, n, NULL, r, NULL, NULL);
       for (int q = 0; q < nr; ++q) f += r[q] * r[q];
       fe[e] = f;
     }
@@ -998,16 +1001,22 @@ static hoc_status screen(opt *o) {
       failed = 1;
     }
     double *n = x ? x + 3 * np : NULL, *r = x ? x + 6 * np : NULL, *J = r ? r + nr_max : NULL;
+    unsigned char *need = x ? malloc(np) : NULL; /* the free nodes' columns of J */
+    if (x && !need) {
+#pragma omp atomic write
+      failed = 1;
+    }
 #pragma omp for schedule(static)
     for (size_t e = 0; e < ne; ++e) {
-      if (!x || (o->touched && !o->touched[e])) continue; /* (no free node reads it) */
-      gather(o, e, x, n);
-      int nr = elem_residuals(o, e, x, n, r, J, NULL);
+      if (!need || (o->touched && !o->touched[e])) continue; /* (no free node reads it) */
       const size_t *cn = m->conn + e * np;
+      for (size_t i = 0; i < np; ++i) need[i] = o->ndof[cn[i]] > 0;
+      gather(o, e, x, n);
+      int nr = elem_residuals(o, e, x, n, need, r, J, NULL);
       for (size_t i = 0; i < np; ++i) {
         const double *dz = o->dz + 6 * cn[i];
         double c[5] = {0, 0, 0, 0, 0};
-        for (int q = 0; q < nr; ++q) {
+        for (int q = 0; q < nr && need[i]; ++q) {
           const double *j = J + 3 * ((size_t)q * np + i);
           double z0 = j[0] * dz[0] + j[1] * dz[1] + j[2] * dz[2];
           double z1 = j[0] * dz[3] + j[1] * dz[4] + j[2] * dz[5];
@@ -1023,6 +1032,7 @@ static hoc_status screen(opt *o) {
         memcpy(contrib + 5 * (e * np + i), c, sizeof c);
       }
     }
+    free(need);
     free(x);
   }
   if (failed) {
@@ -1066,23 +1076,29 @@ static void block_model(const opt *o, size_t b, scratch *s, double *f, double *g
   for (size_t a = o->B->be_start[b]; a < o->B->be_start[b + 1]; ++a) {
     size_t e = o->B->be_elem[a];
     const size_t *cn = m->conn + e * (size_t)np;
+    /* the block's nodes and those it carries: the columns of J it needs */
+    for (int i = 0; i < np; ++i) {
+      size_t node = cn[i];
+      s->w[i] = 1;
+      if (o->B->node_block[node] == b) {
+        s->off[i] = o->B->node_off[node];
+        s->nd[i] = o->ndof[node];
+      } else if (carries && (s->w[i] = carry_weight(o, b, node)) > 0) {
+        s->off[i] = 0;
+        s->nd[i] = 2;
+      } else {
+        s->nd[i] = 0;
+      }
+    }
     gather(o, e, s->x, s->n);
-    int nr = elem_residuals(o, e, s->x, s->n, s->r, s->J, NULL);
+    int nr = elem_residuals(o, e, s->x, s->n, s->nd, s->r, s->J, NULL);
     double *Jz = s->Jz; /* [nr][nd] */
     memset(Jz, 0, (size_t)nr * (size_t)nd * sizeof *Jz);
     for (int i = 0; i < np; ++i) {
       size_t node = cn[i];
-      int off, nd_i;
-      double w = 1;
-      if (o->B->node_block[node] == b) {
-        off = o->B->node_off[node];
-        nd_i = o->ndof[node];
-      } else if (carries && (w = carry_weight(o, b, node)) > 0) {
-        off = 0;
-        nd_i = 2;
-      } else {
-        continue;
-      }
+      int off = s->off[i], nd_i = s->nd[i];
+      double w = s->w[i];
+      if (!nd_i) continue;
       const double *dz = o->dz + 6 * node;
       for (int q = 0; q < nr; ++q) {
         const double *j = s->J + 3 * ((size_t)q * np + (size_t)i);
@@ -1214,7 +1230,7 @@ static int block_trial_flagged(const opt *o, size_t b, scratch *s, double fmax, 
     if (o->pvalid[e] && o->on_boundary[e] && !relaxed_uv(o, e) && !param_valid(o, e, s->uv))
       return 0;
     double smin;
-    int nr = elem_residuals(o, e, s->x, s->n, s->r, NULL, &smin);
+    int nr = elem_residuals(o, e, s->x, s->n, NULL, s->r, NULL, &smin);
     if (o->valid[e] && !relaxed(o, e) && !(smin > 0)) return 0;
     for (int q = 0; q < nr; ++q) *f += s->r[q] * s->r[q];
   }
@@ -1488,8 +1504,11 @@ static hoc_status scratch_alloc(const opt *o, int nthreads, scratch **out) {
     s[i].H = hoc_calloc(nd * nd, sizeof(double));
     s[i].g = hoc_calloc(nd, sizeof(double));
     s[i].L = hoc_calloc(nd * nd, sizeof(double));
+    s[i].w = hoc_calloc(np, sizeof(double));
+    s[i].off = hoc_calloc(np, sizeof(int));
+    s[i].nd = hoc_calloc(np, 1);
     if (!s[i].x || !s[i].n || !s[i].r || !s[i].J || !s[i].uv || !s[i].Jz || !s[i].H || !s[i].g ||
-        !s[i].L)
+        !s[i].L || !s[i].w || !s[i].off || !s[i].nd)
       failed = 1;
   }
   *out = s;
@@ -1509,6 +1528,9 @@ static void scratch_free(scratch *s, int nthreads) {
     free(s[i].H);
     free(s[i].g);
     free(s[i].L);
+    free(s[i].w);
+    free(s[i].off);
+    free(s[i].nd);
   }
   free(s);
 }
@@ -2112,7 +2134,7 @@ static hoc_status block_f_at(opt *o, size_t b, int dof, double h, scratch *s, do
   for (size_t a = o->B->be_start[b]; a < o->B->be_start[b + 1]; ++a) {
     size_t e = o->B->be_elem[a];
     gather(o, e, s->x, s->n);
-    int nr = elem_residuals(o, e, s->x, s->n, s->r, NULL, NULL);
+    int nr = elem_residuals(o, e, s->x, s->n, NULL, s->r, NULL, NULL);
     for (int q = 0; q < nr; ++q) *f += s->r[q] * s->r[q];
   }
   set_moving(o, b, 0);

@@ -270,7 +270,8 @@ double hoc_element_quality_test(const hoc_quality_tables *t, hoc_measure measure
 }
 
 double hoc_element_residuals(const hoc_quality_tables *t, hoc_measure measure, const double *x,
-                             const double *n, double delta, double *r, double *J) {
+                             const double *n, double delta, const unsigned char *need, double *r,
+                             double *J) {
   int np = t->np;
   double smin = INFINITY, a1[3], a2[3], nq[3];
   point_walk w;
@@ -286,30 +287,11 @@ double hoc_element_residuals(const hoc_quality_tables *t, hoc_measure measure, c
     r[q] = sw * (e - 1);
     if (J) {
       double *Jq = J + 3 * (size_t)q * np;
-      for (int i = 0; i < np; ++i)
+      for (int i = 0; i < np; ++i) {
+        if (need && !need[i]) continue;
         for (int k = 0; k < 3; ++k) Jq[3 * i + k] = sw * (g1[k] * G[2 * i] + g2[k] * G[2 * i + 1]);
+      }
     }
-  }
-  return smin;
-}
-
-double hoc_element_residuals_node(const hoc_quality_tables *t, hoc_measure measure,
-                                  const double *x, const double *n, double delta, int node,
-                                  double *r, double *Jk) {
-  int np = t->np;
-  double smin = INFINITY, a1[3], a2[3], nq[3];
-  point_walk w;
-  walk_begin(&w, t, x, n, 0, t->nq);
-  for (int q; (q = walk_next(&w, a1, a2, nq)) >= 0;) {
-    double sig, g1[3], g2[3];
-    const double *G = t->G + 2 * (size_t)q * np;
-    double e = hoc_distortion_point(measure, a1, a2, nq, delta, &sig, g1, g2);
-    double rel = sig / (dot(a1, a1) + dot(a2, a2));
-    if (!(rel >= smin)) smin = rel;
-    double sw = sqrt(t->w[q]);
-    r[q] = sw * (e - 1);
-    double gx = G[2 * node], gy = G[2 * node + 1];
-    for (int k = 0; k < 3; ++k) Jk[3 * q + k] = sw * (g1[k] * gx + g2[k] * gy);
   }
   return smin;
 }
@@ -319,7 +301,8 @@ int hoc_element_node_points(const hoc_quality_tables *t, int dense) {
 }
 
 double hoc_element_node_residuals(const hoc_quality_tables *t, hoc_measure measure, const double *x,
-                                  const double *n, double delta, int dense, double *r, double *J) {
+                                  const double *n, double delta, int dense,
+                                  const unsigned char *need, double *r, double *J) {
   int np = t->np, lat_end = np + t->nlat, pad_end = lat_end + t->nvpad;
   double smin = INFINITY, sw = sqrt(1.0 / hoc_element_node_points(t, dense)), a1[3], a2[3], nj[3];
   point_walk w;
@@ -336,9 +319,11 @@ double hoc_element_node_residuals(const hoc_quality_tables *t, hoc_measure measu
     r[c] = sw * (e - 1);
     if (J) {
       double *Jj = J + 3 * (size_t)c * np;
-      for (int i = 0; i < np; ++i)
+      for (int i = 0; i < np; ++i) {
+        if (need && !need[i]) continue;
         for (int d = 0; d < 3; ++d)
           Jj[3 * i + d] = sw * (g1[d] * G[2 * i] + g2[d] * G[2 * i + 1]);
+      }
     }
     ++c;
   }

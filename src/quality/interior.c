@@ -61,6 +61,21 @@ hoc_status hoc_quality_interior_tables(hoc_quality_tables *t) {
   multinomials(p, t->Mb + n1 + n2);
   multinomials(m3, t->Mb + n1 + n2 + n);
   const double *cm = t->Mb + n1 + n2;
+  /* the weights of sigma_net's two products, in its loops' order and
+   * computed as it would (the same rounding) */
+  HOC_ALLOC(t->Pb, n1 * n1 + n2 * n);
+  const double *c1 = t->Mb, *c2 = c1 + n1, *c3 = cm + n;
+  double *w = t->Pb;
+  for (int k1 = 0; k1 <= m1; ++k1)
+    for (int j1 = 0; j1 + k1 <= m1; ++j1)
+      for (int k2 = 0; k2 <= m1; ++k2)
+        for (int j2 = 0; j2 + k2 <= m1; ++j2)
+          *w++ = c1[ix(m1, j1, k1)] * c1[ix(m1, j2, k2)] / c2[ix(m2, j1 + j2, k1 + k2)];
+  for (int k1 = 0; k1 <= m2; ++k1)
+    for (int j1 = 0; j1 + k1 <= m2; ++j1)
+      for (int k2 = 0; k2 <= p; ++k2)
+        for (int j2 = 0; j2 + k2 <= p; ++j2)
+          *w++ = c2[ix(m2, j1, k1)] * cm[ix(p, j2, k2)] / c3[ix(m3, j1 + j2, k1 + k2)];
   /* V[node][coefficient] = B_a^p(node); Cb = V^-1 (row a: coefficient a
    * as a sum over the nodes) */
   double *V = hoc_calloc(n * n, sizeof *V);
@@ -77,10 +92,10 @@ hoc_status hoc_quality_interior_tables(hoc_quality_tables *t) {
   return status;
 }
 
-/* The multinomials of the four degrees the test uses. */
+/* The products' weights of the test (hoc_quality_tables.Pb). */
 typedef struct weights {
   int p;
-  const double *c1, *c2, *cp, *c3; /* degrees p - 1, 2p - 2, p, 3p - 2 */
+  const double *w1, *w3; /* d1 x d2 (degrees p - 1, p - 1); c . n (degrees 2p - 2, p) */
 } weights;
 
 /* One de Casteljau step of a net of 3-vectors of degree m at the point w
@@ -130,51 +145,67 @@ static void restrict_net(int m, const double *in, const double W[3][3], double *
 }
 
 /* Coefficients P[ix(3p-2, ., .)] of (x_r x x_s) . n from the nets of x and
- * n (degree p); returns the largest magnitude of a term. */
+ * n (degree p); returns the largest magnitude of a term (NaN if one is).
+ * The products' output index ix(m, j1 + j2, k1 + k2) runs on with j2, so
+ * their inner loops are over j2 on arrays of one component each (vector
+ * code); every coefficient still sums its terms in the same order. */
 static double sigma_net(const weights *wt, const double *bx, const double *bn, double *P) {
   int p = wt->p, m1 = p - 1, m2 = 2 * p - 2, m3 = 3 * p - 2;
-  double d1[NET_P * 3], d2[NET_P * 3], c[NET_2 * 3];
+  double d1[3][NET_P], d2[3][NET_P], c[3][NET_2], g[3][NET_P];
   for (int k = 0; k <= m1; ++k)
     for (int j = 0; j + k <= m1; ++j) {
       const double *b0 = bx + 3 * ix(p, j, k), *b1 = bx + 3 * ix(p, j + 1, k),
                    *b2 = bx + 3 * ix(p, j, k + 1);
       for (int d = 0; d < 3; ++d) {
-        d1[3 * ix(m1, j, k) + d] = p * (b1[d] - b0[d]);
-        d2[3 * ix(m1, j, k) + d] = p * (b2[d] - b0[d]);
+        d1[d][ix(m1, j, k)] = p * (b1[d] - b0[d]);
+        d2[d][ix(m1, j, k)] = p * (b2[d] - b0[d]);
       }
     }
-  memset(c, 0, (size_t)(3 * ix(m2, 0, m2 + 1)) * sizeof *c);
+  for (int a = 0; a < ix(p, 0, p + 1); ++a)
+    for (int d = 0; d < 3; ++d) g[d][a] = bn[3 * a + d];
+  memset(c, 0, sizeof c);
+  const double *w1 = wt->w1, *w3 = wt->w3;
   for (int k1 = 0; k1 <= m1; ++k1)
     for (int j1 = 0; j1 + k1 <= m1; ++j1) {
-      const double *f = d1 + 3 * ix(m1, j1, k1);
-      double cf = wt->c1[ix(m1, j1, k1)];
-      for (int k2 = 0; k2 <= m1; ++k2)
-        for (int j2 = 0; j2 + k2 <= m1; ++j2) {
-          const double *g = d2 + 3 * ix(m1, j2, k2);
-          int o = ix(m2, j1 + j2, k1 + k2);
-          double w = cf * wt->c1[ix(m1, j2, k2)] / wt->c2[o];
-          c[3 * o] += w * (f[1] * g[2] - f[2] * g[1]);
-          c[3 * o + 1] += w * (f[2] * g[0] - f[0] * g[2]);
-          c[3 * o + 2] += w * (f[0] * g[1] - f[1] * g[0]);
+      int a = ix(m1, j1, k1);
+      double f0 = d1[0][a], f1 = d1[1][a], f2 = d1[2][a];
+      for (int k2 = 0; k2 <= m1; ++k2) {
+        int len = m1 - k2 + 1, b = ix(m1, 0, k2), o = ix(m2, j1, k1 + k2);
+        const double *g0 = d2[0] + b, *g1 = d2[1] + b, *g2 = d2[2] + b;
+        double *c0 = c[0] + o, *c1 = c[1] + o, *c2 = c[2] + o;
+#pragma GCC ivdep
+        for (int j2 = 0; j2 < len; ++j2) {
+          double w = w1[j2];
+          c0[j2] += w * (f1 * g2[j2] - f2 * g1[j2]);
+          c1[j2] += w * (f2 * g0[j2] - f0 * g2[j2]);
+          c2[j2] += w * (f0 * g1[j2] - f1 * g0[j2]);
         }
+        w1 += len;
+      }
     }
   memset(P, 0, (size_t)ix(m3, 0, m3 + 1) * sizeof *P);
   double scale = 0;
+  int nan = 0;
   for (int k1 = 0; k1 <= m2; ++k1)
     for (int j1 = 0; j1 + k1 <= m2; ++j1) {
-      const double *f = c + 3 * ix(m2, j1, k1);
-      double cf = wt->c2[ix(m2, j1, k1)];
-      for (int k2 = 0; k2 <= p; ++k2)
-        for (int j2 = 0; j2 + k2 <= p; ++j2) {
-          const double *g = bn + 3 * ix(p, j2, k2);
-          int o = ix(m3, j1 + j2, k1 + k2);
-          double v =
-              cf * wt->cp[ix(p, j2, k2)] / wt->c3[o] * (f[0] * g[0] + f[1] * g[1] + f[2] * g[2]);
-          P[o] += v;
-          if (fabs(v) > scale || v != v) scale = fabs(v);
+      int a = ix(m2, j1, k1);
+      double f0 = c[0][a], f1 = c[1][a], f2 = c[2][a];
+      for (int k2 = 0; k2 <= p; ++k2) {
+        int len = p - k2 + 1, b = ix(p, 0, k2);
+        const double *g0 = g[0] + b, *g1 = g[1] + b, *g2 = g[2] + b;
+        double *Po = P + ix(m3, j1, k1 + k2);
+#pragma GCC ivdep
+        for (int j2 = 0; j2 < len; ++j2) {
+          double v = w3[j2] * (f0 * g0[j2] + f1 * g1[j2] + f2 * g2[j2]);
+          Po[j2] += v;
+          double av = fabs(v);
+          scale = av > scale ? av : scale;
+          nan |= v != v;
         }
+        w3 += len;
+      }
     }
-  return scale;
+  return nan ? NAN : scale;
 }
 
 /* 1 if a fold is found on the triangle of nets bx, bn (levels more cuts
@@ -210,11 +241,8 @@ static int folded_net(const weights *wt, const double *bx, const double *bn, int
 int hoc_element_interior_folded(const hoc_quality_tables *t, const double *x, const double *n) {
   int p = t->p, np = t->np;
   if (p < 2 || !t->Cb) return 0;
-  int m1 = p - 1, m2 = 2 * p - 2;
-  weights wt = {p, t->Mb, NULL, NULL, NULL};
-  wt.c2 = wt.c1 + ix(m1, 0, m1 + 1);
-  wt.cp = wt.c2 + ix(m2, 0, m2 + 1);
-  wt.c3 = wt.cp + np;
+  int m1 = p - 1, n1 = ix(m1, 0, m1 + 1);
+  weights wt = {p, t->Pb, t->Pb + (size_t)n1 * (size_t)n1};
   double bx[NET_P * 3], bn[NET_P * 3];
   for (int a = 0; a < np; ++a) {
     const double *row = t->Cb + (size_t)a * (size_t)np;

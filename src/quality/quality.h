@@ -63,6 +63,8 @@ typedef struct hoc_quality_tables {
   /* The exact fold test of the whole triangle (interior.c), for p >= 2 */
   double *Cb; /* [np][np] node values -> Bernstein coefficients of degree p on the triangle */
   double *Mb; /* multinomials |a|! / (a0! a1! a2!) of the degrees p - 1, 2p - 2, p, 3p - 2 */
+  double *Pb; /* the products' weights C(a) C(c) / C(a + c): [n(p-1)][n(p-1)], then
+               * [n(2p-2)][np] (n(m): coefficients of degree m) */
 } hoc_quality_tables;
 
 enum { HOC_QB = 4, HOC_EDGE_REFINE = 4 };
@@ -137,21 +139,14 @@ int hoc_quality_set_width(int width);
 
 /** Residuals of the least-squares objective of one element,
  *  r_q = sqrt(w_q) (eta(x~_q) - 1), and their derivatives.
- *  @param[out] r  [nq]
- *  @param[out] J  [nq][np][3] d r_q / d x_i, or NULL
+ *  @param[in]  need  [np] nonzero for the nodes whose columns of J are
+ *                    wanted (the others are not written), or NULL for all
+ *  @param[out] r     [nq]
+ *  @param[out] J     [nq][np][3] d r_q / d x_i, or NULL
  *  @return smallest sigma / |D phi|^2 over the quadrature points */
 double hoc_element_residuals(const hoc_quality_tables *t, hoc_measure measure, const double *x,
-                             const double *n, double delta, double *r, double *J);
-
-/** Residuals of one element and their derivatives with respect to one of
- *  its nodes only (the local optimiser's need).
- *  @param[in]  node  local index of the node (0..np-1)
- *  @param[out] r     [nq]
- *  @param[out] Jk    [nq][3] d r_q / d x_node
- *  @return smallest sigma / |D phi|^2 over the quadrature points */
-double hoc_element_residuals_node(const hoc_quality_tables *t, hoc_measure measure,
-                                  const double *x, const double *n, double delta, int node,
-                                  double *r, double *Jk);
+                             const double *n, double delta, const unsigned char *need, double *r,
+                             double *J);
 
 /** Residuals at the element's nodes and validation points,
  *  r_j = sqrt(1/count) (eta(point j) - 1), for untangling: the tangle test
@@ -159,11 +154,13 @@ double hoc_element_residuals_node(const hoc_quality_tables *t, hoc_measure measu
  *  The points: the nodes and the order-2p lattice, and if `dense` the
  *  edge points between the lattice's too (count:
  *  hoc_element_node_points).
- *  @param[out] r  [count]
- *  @param[out] J  [count][np][3] d r_j / d x_i, or NULL
+ *  @param[in]  need  as for hoc_element_residuals
+ *  @param[out] r     [count]
+ *  @param[out] J     [count][np][3] d r_j / d x_i, or NULL
  *  @return smallest sigma / |D phi|^2 over those points */
 double hoc_element_node_residuals(const hoc_quality_tables *t, hoc_measure measure, const double *x,
-                                  const double *n, double delta, int dense, double *r, double *J);
+                                  const double *n, double delta, int dense,
+                                  const unsigned char *need, double *r, double *J);
 
 /** Number of residuals of hoc_element_node_residuals. */
 int hoc_element_node_points(const hoc_quality_tables *t, int dense);
@@ -193,7 +190,7 @@ void hoc_quality_edge_point(int k, double s, double *rs);
  *  matrices of the exact tests). */
 hoc_status hoc_quality_invert(int n, const double *V, double *inv);
 
-/** Fill the tables of the whole-triangle test (Cb, Mb) of t (nothing for
+/** Fill the tables of the whole-triangle test (Cb, Mb, Pb) of t (nothing for
  *  p = 1). */
 hoc_status hoc_quality_interior_tables(hoc_quality_tables *t);
 

@@ -38,6 +38,7 @@ static void tables_free(hoc_quality_tables *t) {
   free(t->enode);
   free(t->Cb);
   free(t->Mb);
+  free(t->Pb);
   free(t);
 }
 
