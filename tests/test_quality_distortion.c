@@ -385,6 +385,70 @@ static void test_min_sigma_area(void) {
   CHECK(rel[0] < rel[1] && rel[1] < 0);
 }
 
+/* hoc_element_residuals (points in vector lanes) gives what
+ * hoc_distortion_point gives point by point, bit for bit: shape and Oddy,
+ * regularised or not, valid and folded elements, a point where a1 x a2 = 0 */
+static void test_residuals_pointwise(void) {
+  for (int p = 1; p <= 10; p += 3) {
+    const hoc_quality_tables *t;
+    CHECK_OK(hoc_quality_tables_get(p, HOC_NODES_EQUISPACED, &t));
+    size_t np = (size_t)t->np, nq = (size_t)t->nq;
+    double *x = calloc(3 * np, sizeof *x), *n = calloc(3 * np, sizeof *n);
+    double *r = calloc(nq, sizeof *r), *J = calloc(nq * np * 3, sizeof *J);
+    for (int trial = 0; trial < 5; ++trial) {
+      curved_element(t, 0.3 / p, x);
+      for (size_t i = 0; i < np; ++i) {
+        double nz[3] = {0.05 * (rnd() - 0.5), 0.05 * (rnd() - 0.5), 1};
+        memcpy(n + 3 * i, nz, sizeof nz);
+      }
+      if (trial >= 2) { /* folded */
+        double tmp[3];
+        memcpy(tmp, x + 3, sizeof tmp);
+        memcpy(x + 3, x + 6, sizeof tmp);
+        memcpy(x + 6, tmp, sizeof tmp);
+      }
+      if (trial == 4) /* degenerate: a1 x a2 = 0 everywhere */
+        for (size_t i = 0; i < np; ++i) x[3 * i + 1] = x[3 * i + 2] = 0;
+      for (int meas = 0; meas < 2; ++meas)
+        for (int reg = 0; reg < 2; ++reg) {
+          double delta = reg ? 0.05 : 0;
+          double smin = hoc_element_residuals(t, (hoc_measure)meas, x, n, delta, NULL, r, J);
+          int same = 1;
+          double mn = INFINITY;
+          for (size_t q = 0; q < nq; ++q) {
+            double a1[3] = {0, 0, 0}, a2[3] = {0, 0, 0}, nq3[3] = {0, 0, 0};
+            const double *G = t->G + 2 * q * np;
+            for (size_t i = 0; i < np; ++i)
+              for (int k = 0; k < 3; ++k) {
+                a1[k] += G[2 * i] * x[3 * i + k];
+                a2[k] += G[2 * i + 1] * x[3 * i + k];
+                nq3[k] += t->N[q * np + i] * n[3 * i + k];
+              }
+            double sig, g1[3], g2[3];
+            double e = hoc_distortion_point((hoc_measure)meas, a1, a2, nq3, delta, &sig, g1, g2);
+            double rel = sig / (a1[0] * a1[0] + a1[1] * a1[1] + a1[2] * a1[2] +
+                                (a2[0] * a2[0] + a2[1] * a2[1] + a2[2] * a2[2]));
+            if (!(rel >= mn)) mn = rel;
+            double sw = sqrt(t->w[q]), rq = sw * (e - 1);
+            same &= memcmp(&rq, &r[q], sizeof rq) == 0;
+            for (size_t i = 0; i < np; ++i)
+              for (int k = 0; k < 3; ++k) {
+                double j = sw * (g1[k] * G[2 * i] + g2[k] * G[2 * i + 1]);
+                same &= memcmp(&j, &J[(q * np + i) * 3 + (size_t)k], sizeof j) == 0;
+              }
+          }
+          CHECK(same);
+          CHECK(memcmp(&mn, &smin, sizeof mn) == 0);
+          if (!same) fprintf(stderr, "  p=%d trial=%d measure=%d delta=%g differs\n", p, trial, meas, delta);
+        }
+    }
+    free(x);
+    free(n);
+    free(r);
+    free(J);
+  }
+}
+
 int main(void) {
   /* every closed-form test at each vector width of the measuring kernel */
   for (int w = 2; w <= 4; w += 2) {
@@ -397,6 +461,7 @@ int main(void) {
   hoc_quality_set_width(0);
   test_widths_agree();
   test_gradients();
+  test_residuals_pointwise();
   test_regularisation();
   test_min_sigma_area();
   return test_report();

@@ -269,23 +269,152 @@ double hoc_element_quality_test(const hoc_quality_tables *t, hoc_measure measure
   return tangled || !isfinite(eta) ? 0.0 : 1.0 / eta;
 }
 
+/* hoc_distortion_point at the m points of a block of frames (fr, stride
+ * st; see KFRAMES), in loops over the points that gcc turns into vector
+ * code (the square roots apart): eta, sigma / |D phi|^2 and, if g, the
+ * gradients g[0..2][j] = d eta / d a1, g[3..5][j] = d eta / d a2. The
+ * same operations in the same order as hoc_distortion_point at every
+ * point, so the same results. */
+typedef struct lanes {
+  double c[3][FRAME_POINTS], cc[FRAME_POINTS], cl[FRAME_POINTS], root[FRAME_POINTS];
+  double gam[FRAME_POINTS];
+} lanes;
+
+/* The loop over the points, for one choice of regularised, Oddy and
+ * gradients (constants where it is inlined, so no branch in the loop). */
+static inline __attribute__((always_inline)) void lanes_body(int reg, int oddy, int grads,
+                                                             double delta, int m, const double *fr,
+                                                             size_t st, const lanes *L,
+                                                             double *eta, double *rel,
+                                                             double (*g)[FRAME_POINTS]) {
+  const double *a10 = fr, *a11 = fr + st, *a12 = fr + 2 * st, *a20 = fr + 3 * st,
+               *a21 = fr + 4 * st, *a22 = fr + 5 * st;
+  for (int j = 0; j < m; ++j) {
+    double A1[3] = {a10[j], a11[j], a12[j]}, A2[3] = {a20[j], a21[j], a22[j]};
+    double sig = L->gam[j] * L->cl[j], root = L->root[j];
+    double g11 = dot(A1, A1), g22 = dot(A2, A2), g12 = dot(A1, A2), F = g11 + g22;
+    double s, ds, bad;
+    if (reg) {
+      double sp = 0.5 * (sig + root), sn = 2 * delta * delta / (root - sig);
+      s = sig >= 0 ? sp : sn;
+      ds = s / root;
+      bad = 0;
+    } else {
+      bad = sig > 0 ? 0 : 1;
+      s = sig;
+      ds = 1;
+    }
+    rel[j] = sig / F;
+    double e, deta_ds, d11 = 0, d12 = 0, d22 = 0;
+    if (oddy) {
+      double H = g11 * g11 + 2 * g12 * g12 + g22 * g22 - F * F / 3;
+      double inv2 = 1 / (s * s);
+      e = 1.5 * H * inv2;
+      deta_ds = -3 * H * inv2 / s;
+      d11 = 1.5 * inv2 * (4 * g11 - 4 * F / 3);
+      d12 = 1.5 * inv2 * 4 * g12;
+      d22 = 1.5 * inv2 * (4 * g22 - 4 * F / 3);
+    } else {
+      e = F / (2 * s);
+      deta_ds = -F / (2 * s * s);
+    }
+    eta[j] = bad != 0 ? INFINITY : e;
+    if (!grads) continue;
+    double chat[3];
+    for (int k = 0; k < 3; ++k) chat[k] = L->gam[j] * L->c[k][j] / L->cl[j];
+    double ds1[3], ds2[3];
+    cross(A2, chat, ds1);
+    cross(chat, A1, ds2);
+    double f = deta_ds * ds;
+    for (int k = 0; k < 3; ++k) {
+      double dA1 = oddy ? d11 * A1[k] + d12 * A2[k] : A1[k] / s;
+      double dA2 = oddy ? d12 * A1[k] + d22 * A2[k] : A2[k] / s;
+      g[k][j] = bad != 0 ? 0 : dA1 + f * ds1[k];
+      g[3 + k][j] = bad != 0 ? 0 : dA2 + f * ds2[k];
+    }
+  }
+}
+
+/* hoc_distortion_point at the m points of a block of frames (fr, stride
+ * st; see KFRAMES), in loops over the points that gcc turns into vector
+ * code (the square roots apart): eta, sigma / |D phi|^2 and, if g, the
+ * gradients g[0..2][j] = d eta / d a1, g[3..5][j] = d eta / d a2. The
+ * same operations in the same order as hoc_distortion_point at every
+ * point, so the same results. */
+static void distortion_lanes(hoc_measure measure, double delta, int m, const double *fr,
+                             size_t st, lanes *L, double *eta, double *rel,
+                             double (*g)[FRAME_POINTS]) {
+  const double *a10 = fr, *a11 = fr + st, *a12 = fr + 2 * st, *a20 = fr + 3 * st,
+               *a21 = fr + 4 * st, *a22 = fr + 5 * st, *n0 = fr + 6 * st, *n1 = fr + 7 * st,
+               *n2 = fr + 8 * st;
+  for (int j = 0; j < m; ++j) {
+    double c0 = a11[j] * a22[j] - a12[j] * a21[j], c1 = a12[j] * a20[j] - a10[j] * a22[j],
+           c2 = a10[j] * a21[j] - a11[j] * a20[j];
+    L->c[0][j] = c0;
+    L->c[1][j] = c1;
+    L->c[2][j] = c2;
+    L->cc[j] = c0 * c0 + c1 * c1 + c2 * c2;
+    L->gam[j] = c0 * n0[j] + c1 * n1[j] + c2 * n2[j] > 0 ? 1.0 : -1.0;
+  }
+  for (int j = 0; j < m; ++j) L->cl[j] = sqrt(L->cc[j]);
+  int reg = delta > 0, oddy = measure == HOC_MEASURE_ODDY;
+  if (reg) {
+    for (int j = 0; j < m; ++j) {
+      double sig = L->gam[j] * L->cl[j];
+      L->root[j] = sig * sig + 4 * delta * delta;
+    }
+    for (int j = 0; j < m; ++j) L->root[j] = sqrt(L->root[j]);
+  }
+#define LANES_CASE(R, O, G) lanes_body(R, O, G, delta, m, fr, st, L, eta, rel, g)
+  if (g) {
+    if (reg)
+      oddy ? LANES_CASE(1, 1, 1) : LANES_CASE(1, 0, 1);
+    else
+      oddy ? LANES_CASE(0, 1, 1) : LANES_CASE(0, 0, 1);
+  } else {
+    if (reg)
+      oddy ? LANES_CASE(1, 1, 0) : LANES_CASE(1, 0, 0);
+    else
+      oddy ? LANES_CASE(0, 1, 0) : LANES_CASE(0, 0, 0);
+  }
+#undef LANES_CASE
+  if (!g) return;
+  /* where a1 x a2 = 0 (rare, or not a number): hoc_distortion_point
+   * itself, which takes the reference normal there */
+  for (int j = 0; j < m; ++j) {
+    if (L->cl[j] > 0) continue;
+    double A1[3] = {a10[j], a11[j], a12[j]}, A2[3] = {a20[j], a21[j], a22[j]};
+    double N[3] = {n0[j], n1[j], n2[j]}, g1[3], g2[3], sig;
+    hoc_distortion_point(measure, A1, A2, N, delta, &sig, g1, g2);
+    for (int k = 0; k < 3; ++k) {
+      g[k][j] = g1[k];
+      g[3 + k][j] = g2[k];
+    }
+  }
+}
+
 double hoc_element_residuals(const hoc_quality_tables *t, hoc_measure measure, const double *x,
                              const double *n, double delta, const unsigned char *need, double *r,
                              double *J) {
-  int np = t->np;
-  double smin = INFINITY, a1[3], a2[3], nq[3];
-  point_walk w;
-  walk_begin(&w, t, x, n, 0, t->nq);
-  for (int q; (q = walk_next(&w, a1, a2, nq)) >= 0;) {
-    double sig, g1[3], g2[3];
-    const double *G = t->G + 2 * (size_t)q * np;
-    double e = hoc_distortion_point(measure, a1, a2, nq, delta, &sig, J ? g1 : NULL,
-                                    J ? g2 : NULL);
-    double rel = sig / (dot(a1, a1) + dot(a2, a2));
-    if (!(rel >= smin)) smin = rel;
-    double sw = sqrt(t->w[q]);
-    r[q] = sw * (e - 1);
-    if (J) {
+  int np = t->np, nq = t->nq;
+  double smin = INFINITY;
+  double fr[9 * FRAME_POINTS], eta[FRAME_POINTS], rel[FRAME_POINTS], g[6][FRAME_POINTS];
+  lanes L;
+  int end = (nq + HOC_QB - 1) / HOC_QB;
+  for (int b0 = 0; b0 < end; b0 += FRAME_BLOCKS) {
+    int b1 = b0 + FRAME_BLOCKS < end ? b0 + FRAME_BLOCKS : end;
+    frames(t, b0, b1, x, n, fr);
+    int q0 = b0 * HOC_QB, m = (b1 * HOC_QB < nq ? b1 * HOC_QB : nq) - q0;
+    distortion_lanes(measure, delta, m, fr, (size_t)(b1 - b0) * HOC_QB, &L, eta, rel,
+                     J ? g : NULL);
+    for (int j = 0; j < m; ++j) {
+      int q = q0 + j;
+      if (!(rel[j] >= smin)) smin = rel[j];
+      double sw = sqrt(t->w[q]);
+      r[q] = sw * (eta[j] - 1);
+      if (!J) continue;
+      const double *G = t->G + 2 * (size_t)q * np;
+      double g1[3] = {g[0][j], g[1][j], g[2][j]}, g2[3] = {g[3][j], g[4][j], g[5][j]};
       double *Jq = J + 3 * (size_t)q * np;
       for (int i = 0; i < np; ++i) {
         if (need && !need[i]) continue;
