@@ -157,7 +157,8 @@ static void restrict_net(int m, const double *in, const double W[3][3], double *
 }
 
 /* Coefficients P[ix(3p-2, ., .)] of (x_r x x_s) . n from the nets of x and
- * n (degree p); returns the largest magnitude of a term (NaN if one is).
+ * n (degree p); returns the largest magnitude of a term (NaN if one is
+ * not finite: the caller treats NaN and infinity alike).
  * The products' output index ix(m, j1 + j2, k1 + k2) runs on with j2, so
  * their inner loops are over j2 on arrays of one component each (vector
  * code); every coefficient still sums its terms in the same order. */
@@ -185,7 +186,6 @@ static double sigma_net(const weights *wt, const double *bx, const double *bn, d
         int len = m1 - k2 + 1, b = ix(m1, 0, k2), o = ix(m2, j1, k1 + k2);
         const double *g0 = d2[0] + b, *g1 = d2[1] + b, *g2 = d2[2] + b;
         double *c0 = c[0] + o, *c1 = c[1] + o, *c2 = c[2] + o;
-#pragma GCC ivdep
         for (int j2 = 0; j2 < len; ++j2) {
           double w = w1[j2];
           c0[j2] += w * (f1 * g2[j2] - f2 * g1[j2]);
@@ -196,8 +196,9 @@ static double sigma_net(const weights *wt, const double *bx, const double *bn, d
       }
     }
   memset(P, 0, (size_t)ix(m3, 0, m3 + 1) * sizeof *P);
-  double scale = 0;
-  int nan = 0;
+  /* per position j2 (no reduction in the loop, which would keep it
+   * scalar): the largest |term|, and 0 or NaN where a term is not finite */
+  double lmax[MAXP + 1] = {0}, lz[MAXP + 1] = {0};
   for (int k1 = 0; k1 <= m2; ++k1)
     for (int j1 = 0; j1 + k1 <= m2; ++j1) {
       int a = ix(m2, j1, k1);
@@ -206,18 +207,22 @@ static double sigma_net(const weights *wt, const double *bx, const double *bn, d
         int len = p - k2 + 1, b = ix(p, 0, k2);
         const double *g0 = g[0] + b, *g1 = g[1] + b, *g2 = g[2] + b;
         double *Po = P + ix(m3, j1, k1 + k2);
-#pragma GCC ivdep
         for (int j2 = 0; j2 < len; ++j2) {
           double v = w3[j2] * (f0 * g0[j2] + f1 * g1[j2] + f2 * g2[j2]);
           Po[j2] += v;
           double av = fabs(v);
-          scale = av > scale ? av : scale;
-          nan |= v != v;
+          lmax[j2] = av > lmax[j2] ? av : lmax[j2];
+          lz[j2] += v * 0;
         }
         w3 += len;
       }
     }
-  return nan ? NAN : scale;
+  double scale = 0;
+  for (int j = 0; j <= p; ++j) {
+    if (lz[j] != lz[j]) return NAN;
+    if (lmax[j] > scale) scale = lmax[j];
+  }
+  return scale;
 }
 
 /* 1 if a fold is found on the triangle of nets bx, bn (levels more cuts
