@@ -269,12 +269,8 @@ double hoc_element_quality_test(const hoc_quality_tables *t, hoc_measure measure
   return tangled || !isfinite(eta) ? 0.0 : 1.0 / eta;
 }
 
-/* hoc_distortion_point at the m points of a block of frames (fr, stride
- * st; see KFRAMES), in loops over the points that gcc turns into vector
- * code (the square roots apart): eta, sigma / |D phi|^2 and, if g, the
- * gradients g[0..2][j] = d eta / d a1, g[3..5][j] = d eta / d a2. The
- * same operations in the same order as hoc_distortion_point at every
- * point, so the same results. */
+/* distortion_lanes' values per point: a1 x a2, its squared length and
+ * length, sqrt(sigma^2 + 4 delta^2), and gamma (+1 or -1) */
 typedef struct lanes {
   double c[3][FRAME_POINTS], cc[FRAME_POINTS], cl[FRAME_POINTS], root[FRAME_POINTS];
   double gam[FRAME_POINTS];
