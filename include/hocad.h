@@ -322,7 +322,10 @@ typedef struct hoc_optimize_options {
                              else [elements] flags: only the nodes of flagged elements, and
                              of the elements within free_rings rings of them (sharing a
                              node), move; the rest stay where they are (a local repair,
-                             e.g. of the elements a split made) */
+                             e.g. of the elements a split made). A local repair counts
+                             tangled elements by the exact test from its first sweep
+                             (no sampled first phase) and never raises the
+                             regularisation when untangling stalls */
   int free_rings;       /**< see free_elements (0: only the flagged elements' nodes) */
 } hoc_optimize_options;
 
