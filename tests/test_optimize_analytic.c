@@ -319,6 +319,19 @@ static void check_local(void) {
   CHECK_OK(hoc_mesh_optimize(m, &oo, &r));
   CHECK_OK(hoc_mesh_measure(m, HOC_MEASURE_SHAPE, NULL, NULL, &st));
   CHECK(st.tangled > 0 && r.tangled_final > 0);
+  /* and it is not tried again: a local repair makes no second attempt
+   * (nothing is relaxed in it) and no protected run (it runs the exact
+   * test from its first sweep already), so it ends with its first run */
+  printf("local, fold outside: %d sweeps, second attempt at %d, protected run at %d\n",
+         r.iterations, r.second_attempt, r.protected_run);
+  CHECK(r.second_attempt == 0 && r.protected_run == 0);
+  int sweeps = r.iterations;
+  hoc_mesh_destroy(&m);
+  CHECK_OK(hoc_mesh_copy(before, &m));
+  if (!m) goto done;
+  oo.max_iterations = 1000;
+  CHECK_OK(hoc_mesh_optimize(m, &oo, &r));
+  CHECK(r.iterations == sweeps && r.tangled_final > 0);
 done:
   free(flag);
   free(ring);

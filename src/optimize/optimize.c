@@ -1863,7 +1863,11 @@ sweeps:
       /* still tangled when the sweeps run out (or nothing moves): a second
        * attempt of half as many sweeps from the best state reached, with
        * the (u, v) rule relaxed too (relaxed_uv) */
-      if (!tangled || ctx.relax_uv || best.tangled == SIZE_MAX) {
+      /* Not in a local repair: its regularisation is never raised, so
+       * nothing is relaxed and the second attempt would only go over the
+       * first one's ground again (the aircraft at order 10: sweeps 39-53
+       * of a red-green split's repair, no fewer tangled) */
+      if (!tangled || ctx.relax_uv || best.tangled == SIZE_MAX || ctx.touched) {
         res.stopped_at_limit = tangled && !cut;
         break;
       }
@@ -1974,7 +1978,7 @@ sweeps:
     for (size_t i = 0; i < mesh->n_nodes; ++i) active += ctx.active[i];
     if (!active || !moved) {
       res.converged = tangled == 0;
-      if (tangled && !ctx.relax_uv) {
+      if (tangled && !ctx.relax_uv && !ctx.touched) {
         last = it; /* the second attempt */
         cut = 1;
         continue;
@@ -1995,6 +1999,8 @@ sweeps:
       break;
     }
   }
+  /* a local repair has no first phase: its only one used all its sweeps */
+  if (ctx.touched) *limited = res.stopped_at_limit;
   if (best.tangled != SIZE_MAX && tangled > best.tangled) {
     snapshot_restore(&best, mesh); /* more tangled than once: the best state reached */
     HOC_TRY_GOTO(eval_all(&ctx), done);
@@ -2096,8 +2102,11 @@ hoc_status hoc_mesh_optimize(hoc_mesh *mesh, const hoc_optimize_options *options
    * protected, and 0 after four splits). Not above order 5: there every
    * trial of its first phase runs the exact tests, whose cost grows as
    * p^4 (the aircraft at order 10: 8-24 s a sweep of the exact phase,
-   * 0.4-4 s of the first), and `hocad` splits what is left anyway. */
-  if (status == HOC_OK && a.tangled_final && !limited && mesh->order <= PROTECT_MAX_ORDER) {
+   * 0.4-4 s of the first), and `hocad` splits what is left anyway. Not in
+   * a local repair (free_elements): it runs the exact test from its first
+   * sweep, as a protected run would, so that run would only repeat it. */
+  if (status == HOC_OK && a.tangled_final && !limited && mesh->order <= PROTECT_MAX_ORDER &&
+      !(options && options->free_elements)) {
     status = snapshot_take(&first, mesh, a.tangled_final, a.objective_final);
     if (status == HOC_OK) {
       snapshot_restore(&start, mesh);
