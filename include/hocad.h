@@ -309,7 +309,7 @@ typedef struct hoc_optimize_options {
                              second attempt of up to half as many more restarts from the
                              best state reached, with boundary elements next to a fold
                              free to fold in (u, v) too (faces without a pole); it ends
-                             early the same way */
+                             early the same way (not in a local repair: free_elements) */
   double tolerance;     /**< a node whose move lowers f by less than tolerance * f / (free
                              nodes) goes to sleep; the optimisation ends when every node
                              sleeps, or when the last ten sweeps, all without a tangled
@@ -324,8 +324,9 @@ typedef struct hoc_optimize_options {
                              node), move; the rest stay where they are (a local repair,
                              e.g. of the elements a split made). A local repair counts
                              tangled elements by the exact test from its first sweep
-                             (no sampled first phase) and never raises the
-                             regularisation when untangling stalls */
+                             (no sampled first phase), never raises the
+                             regularisation when untangling stalls, and makes neither
+                             a second attempt nor a protected run */
   int free_rings;       /**< see free_elements (0: only the flagged elements' nodes) */
 } hoc_optimize_options;
 
