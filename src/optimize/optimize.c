@@ -1862,11 +1862,11 @@ sweeps:
     if (it > last) {
       /* still tangled when the sweeps run out (or nothing moves): a second
        * attempt of half as many sweeps from the best state reached, with
-       * the (u, v) rule relaxed too (relaxed_uv) */
-      /* Not in a local repair: its regularisation is never raised, so
-       * nothing is relaxed and the second attempt would only go over the
-       * first one's ground again (the aircraft at order 10: sweeps 39-53
-       * of a red-green split's repair, no fewer tangled) */
+       * the (u, v) rule relaxed too (relaxed_uv). Not in a local repair:
+       * its regularisation is never raised, so nothing is relaxed and the
+       * second attempt would only go over the first one's ground again
+       * (the aircraft at order 10: sweeps 39-53 of a red-green split's
+       * repair, no fewer tangled) */
       if (!tangled || ctx.relax_uv || best.tangled == SIZE_MAX || ctx.touched) {
         res.stopped_at_limit = tangled && !cut;
         break;
@@ -1999,8 +1999,6 @@ sweeps:
       break;
     }
   }
-  /* a local repair has no first phase: its only one used all its sweeps */
-  if (ctx.touched) *limited = res.stopped_at_limit;
   if (best.tangled != SIZE_MAX && tangled > best.tangled) {
     snapshot_restore(&best, mesh); /* more tangled than once: the best state reached */
     HOC_TRY_GOTO(eval_all(&ctx), done);
