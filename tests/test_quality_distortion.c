@@ -277,6 +277,92 @@ static void test_gradients(void) {
   }
 }
 
+/* hoc_element_point_residual (a fold point's residual, basis evaluated at
+ * the point): at the quadrature points it gives hoc_element_residuals'
+ * residuals with their weights; its derivatives against central
+ * differences at random points, valid and folded elements, regularised;
+ * with a mask the wanted columns alone. */
+static void test_point_residual(void) {
+  for (int p = 1; p <= 10; p += 3) {
+    const hoc_quality_tables *t;
+    CHECK_OK(hoc_quality_tables_get(p, HOC_NODES_EQUISPACED, &t));
+    hoc_quadrature quad = {0};
+    CHECK_OK(hoc_quadrature_triangle(t->degree, &quad));
+    size_t np = (size_t)t->np, nq = (size_t)t->nq;
+    double *x = calloc(3 * np, sizeof *x), *n = calloc(3 * np, sizeof *n);
+    double *r = calloc(nq, sizeof *r), *J = calloc(np * 3, sizeof *J);
+    double *Jm = calloc(np * 3, sizeof *Jm);
+    unsigned char *need = calloc(np, 1);
+    for (int trial = 0; trial < 4; ++trial) {
+      curved_element(t, 0.3 / p, x);
+      for (size_t i = 0; i < np; ++i) {
+        double nz[3] = {0.05 * (rnd() - 0.5), 0.05 * (rnd() - 0.5), 1};
+        memcpy(n + 3 * i, nz, sizeof nz);
+      }
+      if (trial >= 2) { /* folded */
+        double tmp[3];
+        memcpy(tmp, x + 3, sizeof tmp);
+        memcpy(x + 3, x + 6, sizeof tmp);
+        memcpy(x + 6, tmp, sizeof tmp);
+      }
+      double delta = trial % 2 ? 1e-3 : (trial >= 2 ? 0.05 : 0.0);
+      hoc_element_residuals(t, HOC_MEASURE_SHAPE, x, n, delta, NULL, r, NULL);
+      double worst = 0;
+      for (size_t q = 0; q < nq; ++q) {
+        double rq;
+        hoc_element_point_residual(t, HOC_MEASURE_SHAPE, x, n, delta, quad.rs + 2 * q, t->w[q],
+                                   NULL, &rq, NULL);
+        worst = fmax(worst, fabs(rq - r[q]) / (1 + fabs(r[q])));
+      }
+      CHECK(worst < 1e-10);
+      if (!(worst < 1e-10)) fprintf(stderr, "  p=%d: point residual differs by %g\n", p, worst);
+      for (int k = 0; k < 3; ++k) {
+        double rs[2] = {rnd(), rnd()};
+        if (rs[0] + rs[1] > 1) rs[0] = 1 - rs[0], rs[1] = 1 - rs[1];
+        for (int meas = 0; meas < 2; ++meas) {
+          double r0, rp, rm, err = 0, scale = 0;
+          double rel = hoc_element_point_residual(t, (hoc_measure)meas, x, n, delta, rs, 0.3, NULL,
+                                                  &r0, J);
+          if (delta == 0 && !(rel > 0)) continue;
+          for (size_t i = 0; i < np; ++i)
+            for (int d = 0; d < 3; ++d) {
+              double h = 1e-6, save = x[3 * i + d];
+              x[3 * i + d] = save + h;
+              hoc_element_point_residual(t, (hoc_measure)meas, x, n, delta, rs, 0.3, NULL, &rp,
+                                         NULL);
+              x[3 * i + d] = save - h;
+              hoc_element_point_residual(t, (hoc_measure)meas, x, n, delta, rs, 0.3, NULL, &rm,
+                                         NULL);
+              x[3 * i + d] = save;
+              double fd = (rp - rm) / (2 * h), an = J[3 * i + (size_t)d];
+              err = fmax(err, fabs(fd - an));
+              scale = fmax(scale, fabs(an));
+            }
+          CHECK(err <= 1e-6 * (1 + scale));
+          if (!(err <= 1e-6 * (1 + scale)))
+            fprintf(stderr, "  p=%d measure=%d delta=%g: point gradient error %g (scale %g)\n", p,
+                    meas, delta, err, scale);
+          for (size_t i = 0; i < np; ++i) need[i] = (unsigned char)(i % 2 == (size_t)k % 2);
+          for (size_t i = 0; i < 3 * np; ++i) Jm[i] = -7.5;
+          double rk;
+          hoc_element_point_residual(t, (hoc_measure)meas, x, n, delta, rs, 0.3, need, &rk, Jm);
+          int same = memcmp(&rk, &r0, sizeof rk) == 0;
+          for (size_t i = 0; i < 3 * np; ++i)
+            same &= need[i / 3] ? memcmp(&Jm[i], &J[i], sizeof *J) == 0 : Jm[i] == -7.5;
+          CHECK(same);
+        }
+      }
+    }
+    hoc_quadrature_free(&quad);
+    free(x);
+    free(n);
+    free(r);
+    free(J);
+    free(Jm);
+    free(need);
+  }
+}
+
 /* The regularised determinant: sigma_delta -> sigma as delta -> 0 (sigma > 0),
  * and eta stays finite and positive for tangled points when delta > 0. */
 static void test_regularisation(void) {
@@ -462,6 +548,7 @@ int main(void) {
   test_widths_agree();
   test_gradients();
   test_residuals_pointwise();
+  test_point_residual();
   test_regularisation();
   test_min_sigma_area();
   return test_report();

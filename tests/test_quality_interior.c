@@ -66,6 +66,18 @@ static void check_order(int p, hoc_nodeset set, double amplitude, int trials, in
        * the whole-triangle test's 1/32 next to an edge is theirs) */
       CHECK(exact == 1 || hoc_element_edges_folded(t, x, n));
       CHECK(hoc_element_folded(t, x, n) == 1);
+      /* and says where: a point of the element where sigma < 0 */
+      double rs[2] = {-1, -1}, r;
+      CHECK(hoc_element_fold_point(t, x, n, rs) == 1);
+      CHECK(rs[0] >= 0 && rs[1] >= 0 && rs[0] + rs[1] <= 1 + 1e-15);
+      double rel =
+          hoc_element_point_residual(t, HOC_MEASURE_SHAPE, x, n, 0.0, rs, 1.0, NULL, &r, NULL);
+      CHECK(rel < 0);
+      if (exact) {
+        CHECK(hoc_element_interior_fold_point(t, x, n, rs) == 1);
+        CHECK(hoc_element_point_residual(t, HOC_MEASURE_SHAPE, x, n, 0.0, rs, 1.0, NULL, &r,
+                                         NULL) < 0);
+      }
       ++folded;
       if (!hoc_element_edges_folded(t, x, n)) {
         ++only_inside;
@@ -75,6 +87,8 @@ static void check_order(int p, hoc_nodeset set, double amplitude, int trials, in
       }
     } else if (mn > 1e-3) {
       CHECK(exact == 0);
+      double rs[2];
+      CHECK(hoc_element_fold_point(t, x, n, rs) == 0);
       ++valid;
     } else {
       ++ambiguous;

@@ -31,8 +31,9 @@
  * nodes, the order-2p lattice); once they say untangled, the exact fold
  * tests of measuring (Bernstein coefficients, quality.h) may still find
  * folds between them, and the sweeps go on with the exact test in every
- * verdict and residuals at dense edge points (see the end of
- * hoc_mesh_optimize).
+ * verdict, residuals at dense edge points, and in each element that only
+ * the exact tests find folded a residual at the point where they found
+ * sigma < 0 (see the end of hoc_mesh_optimize).
  */
 #include "mesh/mesh.h"
 #include "quality/quality.h"
@@ -118,6 +119,8 @@ typedef struct opt {
   unsigned char *was_region; /* [n_elems] region of the previous sweep */
   unsigned char *dirty; /* [n_elems] a node moved since the last sweep_start */
   double *delta_own;    /* [n_elems] regularisation from the element's own tangling */
+  unsigned char *has_fold; /* [n_elems] tangled by the exact tests alone (the second phase): */
+  double *fold_rs;      /* [n_elems][2] a point where they find sigma < 0, a residual there */
   double *fe, *qe;      /* [n_elems] objective part and q, as of the last sweep_start */
   double *hsize;        /* [n_nodes] local length: bound on one step's displacement */
   unsigned char *active;/* [n_nodes] */
@@ -171,7 +174,7 @@ static void opt_free(opt *o) {
                o->fe,        o->qe,          o->hsize,   o->active,     o->moving,   o->step,
                o->alpha,     o->f0,          o->fnew,    o->slope,      o->state,    o->list,
                o->committed, o->tpar,        o->txyz,    o->tdz,        o->tslot_uv, o->tnormal,
-               o->xvalid,    o->near,        o->near_e,  o->touched};
+               o->xvalid,    o->near,        o->near_e,  o->touched,    o->has_fold, o->fold_rs};
   for (size_t i = 0; i < sizeof p / sizeof *p; ++i) free(p[i]);
 }
 
@@ -579,6 +582,8 @@ static hoc_status setup(opt *o, hoc_mesh *m, hoc_measure measure, int fix_curves
   HOC_ALLOC(o->was_region, ne);
   HOC_ALLOC(o->dirty, ne);
   HOC_ALLOC(o->delta_own, ne);
+  HOC_ALLOC(o->has_fold, ne);
+  HOC_ALLOC(o->fold_rs, 2 * ne);
   HOC_ALLOC(o->fe, ne);
   HOC_ALLOC(o->qe, ne);
   memset(o->dirty, 1, ne);
@@ -751,8 +756,9 @@ static void sigma_stats(const opt *o, const double *x, const double *n, double *
 
 /* Residuals of element e's objective: the quadrature points, and in the
  * tangled region also the nodes and validation points (the tangle test
- * asks det > 0 there too). r: [nq + np + nv], J: [nq + np + nv][np][3] or
- * NULL. Returns the count and sets
+ * asks det > 0 there too) and, where only the exact tests find the element
+ * folded, the point where they found it. r: [nq + np + nv + 1],
+ * J: [nq + np + nv + 1][np][3] or NULL. Returns the count and sets
  * *smin to the smallest sigma / |D phi|^2 over the quadrature points. */
 static int elem_residuals(const opt *o, size_t e, const double *x, const double *n,
                           const unsigned char *need, double *r, double *J, double *smin) {
@@ -762,7 +768,13 @@ static int elem_residuals(const opt *o, size_t e, const double *x, const double 
   if (!o->region[e]) return nq;
   hoc_element_node_residuals(o->t, o->measure, x, n, o->delta[e], o->exact, need, r + nq,
                              J ? J + 3 * (size_t)nq * (size_t)np : NULL);
-  return nq + hoc_element_node_points(o->t, o->exact);
+  int count = nq + hoc_element_node_points(o->t, o->exact);
+  if (!o->has_fold[e]) return count;
+  /* weighted as one of the node residuals */
+  hoc_element_point_residual(o->t, o->measure, x, n, o->delta[e], o->fold_rs + 2 * e,
+                             1.0 / hoc_element_node_points(o->t, o->exact), need, r + count,
+                             J ? J + 3 * (size_t)count * (size_t)np : NULL);
+  return count + 1;
 }
 
 /* Per-element state at the start of a sweep: validity, parametric
@@ -792,6 +804,10 @@ static hoc_status sweep_start(opt *o, double *objective, double *min_q, size_t *
       o->xvalid[e] = o->valid[e] && (o->exact || !o->protect || !hoc_element_folded(o->t, x, n));
       o->pvalid[e] = (unsigned char)param_valid(o, e, uv);
       o->delta_own[e] = 0;
+      /* a fold the samples miss: a residual where the exact tests found it
+       * (the samples' residuals cannot see it, and no step would open it) */
+      o->has_fold[e] = o->exact && !o->valid[e] && !hoc_element_tangled(o->t, x, n, 0) &&
+                       hoc_element_fold_point(o->t, x, n, o->fold_rs + 2 * e);
       if (!o->valid[e]) {
         double smin, scale;
         sigma_stats(o, x, n, &smin, &scale);
@@ -822,7 +838,8 @@ static hoc_status sweep_start(opt *o, double *objective, double *min_q, size_t *
   /* objective parts that changed: moved, or in or out of the region */
 #pragma omp parallel
   {
-    double *x = malloc((6 * (size_t)np + (size_t)nq + (size_t)np + (size_t)o->t->nv) * sizeof *x);
+    double *x =
+        malloc((6 * (size_t)np + (size_t)nq + (size_t)np + (size_t)o->t->nv + 1) * sizeof *x);
     if (!x) {
 #pragma omp atomic write
       failed = 1;
@@ -992,7 +1009,7 @@ static hoc_status screen(opt *o) {
   /* [ne][np][g0 g1 h00 h01 h11], every entry written below (not zeroed) */
   double *contrib = hoc_realloc(NULL, 5 * ne * np + 1, sizeof *contrib);
   HOC_CHECK(contrib, HOC_ERR_MEMORY, "out of memory");
-  int nr_max = o->nq + o->np + o->t->nv, failed = 0;
+  int nr_max = o->nq + o->np + o->t->nv + 1, failed = 0; /* + 1: a fold point */
 #pragma omp parallel
   {
     double *x = malloc((6 * np + (size_t)nr_max + 3 * (size_t)nr_max * np) * sizeof *x);
@@ -1496,7 +1513,7 @@ static hoc_status scratch_alloc(const opt *o, int nthreads, scratch **out) {
   for (int i = 0; i < nthreads; ++i) {
     s[i].x = hoc_calloc(3 * np, sizeof(double));
     s[i].n = hoc_calloc(3 * np, sizeof(double));
-    size_t nr = nq + np + (size_t)o->t->nv;
+    size_t nr = nq + np + (size_t)o->t->nv + 1; /* + 1: a fold point */
     s[i].r = hoc_calloc(nr, sizeof(double));
     s[i].J = hoc_calloc(3 * nr * np, sizeof(double));
     s[i].uv = hoc_calloc(2 * np, sizeof(double));

@@ -2,6 +2,7 @@
  * (Definitions 1-2) and least-squares residuals with their derivatives.
  * One definition of eta serves the report and the optimiser.
  * SPDX-License-Identifier: GPL-2.0-or-later */
+#include "basis/basis.h"
 #include "quality/quality.h"
 
 #include <math.h>
@@ -453,6 +454,41 @@ double hoc_element_node_residuals(const hoc_quality_tables *t, hoc_measure measu
     ++c;
   }
   return smin;
+}
+
+double hoc_element_point_residual(const hoc_quality_tables *t, hoc_measure measure,
+                                  const double *x, const double *n, double delta,
+                                  const double rs[2], double w, const unsigned char *need,
+                                  double *r, double *J) {
+  enum { NP_MAX = (HOC_MAX_ORDER + 1) * (HOC_MAX_ORDER + 2) / 2 };
+  int np = t->np;
+  double N[NP_MAX], dN[2 * NP_MAX], G[2 * NP_MAX];
+  *r = 0;
+  if (!t->basis || np > NP_MAX || hoc_lagrange_eval(t->basis, 1, rs, N, dN) != HOC_OK) {
+    hoc_error_clear();
+    return NAN;
+  }
+  const double inv_sqrt3 = 0.57735026918962576451; /* W^{-T}, as the tables' */
+  for (int i = 0; i < np; ++i) {
+    G[2 * i] = dN[2 * i];
+    G[2 * i + 1] = (2 * dN[2 * i + 1] - dN[2 * i]) * inv_sqrt3;
+  }
+  double a1[3] = {0, 0, 0}, a2[3] = {0, 0, 0}, nq[3] = {0, 0, 0};
+  for (int i = 0; i < np; ++i)
+    for (int d = 0; d < 3; ++d) {
+      a1[d] += G[2 * i] * x[3 * i + d];
+      a2[d] += G[2 * i + 1] * x[3 * i + d];
+      nq[d] += N[i] * n[3 * i + d];
+    }
+  double sig, g1[3], g2[3], sw = sqrt(w);
+  double e = hoc_distortion_point(measure, a1, a2, nq, delta, &sig, J ? g1 : NULL, J ? g2 : NULL);
+  *r = sw * (e - 1);
+  if (J)
+    for (int i = 0; i < np; ++i) {
+      if (need && !need[i]) continue;
+      for (int d = 0; d < 3; ++d) J[3 * i + d] = sw * (g1[d] * G[2 * i] + g2[d] * G[2 * i + 1]);
+    }
+  return sig / (dot(a1, a1) + dot(a2, a2));
 }
 
 /* 1 if sigma <= 0 at one of the points first..last-1. */

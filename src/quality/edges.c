@@ -149,8 +149,12 @@ done:
  * at an end of some piece of a subdivision into halves down to `depth`
  * more levels; 0 once every piece has all coefficients > 0 or nothing is
  * found. */
-static int negative_somewhere(const double *c, int d, double tol, int depth) {
-  if (c[0] < -tol || c[d] < -tol) return 1;
+static int negative_somewhere(const double *c, int d, double tol, int depth, double a, double b,
+                              double *where) {
+  if (c[0] < -tol || c[d] < -tol) {
+    *where = c[0] < -tol ? a : b; /* end coefficients are the values there */
+    return 1;
+  }
   int positive = 1;
   for (int l = 0; l <= d && positive; ++l)
     positive = c[l] > 0;
@@ -165,11 +169,18 @@ static int negative_somewhere(const double *c, int d, double tol, int depth) {
     left[r] = w[0];
     right[d - r] = w[d - r];
   }
-  return negative_somewhere(left, d, tol, depth - 1) ||
-         negative_somewhere(right, d, tol, depth - 1);
+  double mid = 0.5 * (a + b);
+  return negative_somewhere(left, d, tol, depth - 1, a, mid, where) ||
+         negative_somewhere(right, d, tol, depth - 1, mid, b, where);
 }
 
 int hoc_element_edges_folded(const hoc_quality_tables *t, const double *x, const double *n) {
+  double rs[2];
+  return hoc_element_edges_fold_point(t, x, n, rs);
+}
+
+int hoc_element_edges_fold_point(const hoc_quality_tables *t, const double *x, const double *n,
+                                 double rs[2]) {
   int p = t->p, np = t->np, d = 3 * p - 2;
   if (p < 2 || !t->Ge) return 0;
   double A1[HOC_MAX_ORDER][3], A2[HOC_MAX_ORDER][3], B1[HOC_MAX_ORDER][3], B2[HOC_MAX_ORDER][3];
@@ -221,7 +232,11 @@ int hoc_element_edges_folded(const hoc_quality_tables *t, const double *x, const
     int degenerate = !(scale > 0) || !isfinite(scale);
     for (int l = 0; l <= d && !degenerate; ++l)
       degenerate = !isfinite(c[l]);
-    if (degenerate || negative_somewhere(c, d, 1e-10 * scale, MAX_DEPTH)) return 1;
+    double where = 0.5;
+    if (degenerate || negative_somewhere(c, d, 1e-10 * scale, MAX_DEPTH, 0, 1, &where)) {
+      hoc_quality_edge_point(k, where, rs);
+      return 1;
+    }
   }
   return 0;
 }

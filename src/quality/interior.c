@@ -227,13 +227,25 @@ static double sigma_net(const weights *wt, const double *bx, const double *bn, d
 
 /* 1 if a fold is found on the triangle of nets bx, bn (levels more cuts
  * allowed), 0 if proven positive or nothing found. */
-static int folded_net(const weights *wt, const double *bx, const double *bn, int levels) {
+static int folded_net(const weights *wt, const double *bx, const double *bn, int levels,
+                      const double corner[3][2], double rs[2]) {
   int m3 = 3 * wt->p - 2, nc = ix(m3, 0, m3 + 1);
   double P[NET_3];
   double scale = sigma_net(wt, bx, bn, P);
-  if (!(scale > 0) || !isfinite(scale)) return 1; /* degenerate or not a number */
+  if (!(scale > 0) || !isfinite(scale)) { /* degenerate or not a number */
+    for (int d = 0; d < 2; ++d)
+      rs[d] = (corner[0][d] + corner[1][d] + corner[2][d]) / 3;
+    return 1;
+  }
   double tol = 1e-10 * scale;
-  if (P[ix(m3, 0, 0)] < -tol || P[ix(m3, m3, 0)] < -tol || P[ix(m3, 0, m3)] < -tol) return 1;
+  /* corner coefficients are the values at the corners */
+  const int at[3] = {ix(m3, 0, 0), ix(m3, m3, 0), ix(m3, 0, m3)};
+  for (int c = 0; c < 3; ++c)
+    if (P[at[c]] < -tol) {
+      rs[0] = corner[c][0];
+      rs[1] = corner[c][1];
+      return 1;
+    }
   int positive = 1;
   for (int i = 0; i < nc && positive; ++i)
     positive = P[i] > 0;
@@ -250,12 +262,23 @@ static int folded_net(const weights *wt, const double *bx, const double *bn, int
   for (int q = 0; q < 4; ++q) {
     restrict_net(wt->p, bx, kids[q], cx);
     restrict_net(wt->p, bn, kids[q], cn);
-    if (folded_net(wt, cx, cn, levels - 1)) return 1;
+    double kc[3][2];
+    for (int c = 0; c < 3; ++c)
+      for (int d = 0; d < 2; ++d)
+        kc[c][d] = kids[q][c][0] * corner[0][d] + kids[q][c][1] * corner[1][d] +
+                   kids[q][c][2] * corner[2][d];
+    if (folded_net(wt, cx, cn, levels - 1, (const double(*)[2])kc, rs)) return 1;
   }
   return 0;
 }
 
 int hoc_element_interior_folded(const hoc_quality_tables *t, const double *x, const double *n) {
+  double rs[2];
+  return hoc_element_interior_fold_point(t, x, n, rs);
+}
+
+int hoc_element_interior_fold_point(const hoc_quality_tables *t, const double *x, const double *n,
+                                    double rs[2]) {
   int p = t->p, np = t->np;
   if (p < 2 || !t->Cb) return 0;
   int m1 = p - 1, n1 = ix(m1, 0, m1 + 1);
@@ -272,9 +295,15 @@ int hoc_element_interior_folded(const hoc_quality_tables *t, const double *x, co
     memcpy(bx + 3 * a, sx, sizeof sx);
     memcpy(bn + 3 * a, sn, sizeof sn);
   }
-  return folded_net(&wt, bx, bn, MAX_LEVELS);
+  static const double whole[3][2] = {{0, 0}, {1, 0}, {0, 1}};
+  return folded_net(&wt, bx, bn, MAX_LEVELS, whole, rs);
 }
 
 int hoc_element_folded(const hoc_quality_tables *t, const double *x, const double *n) {
   return hoc_element_edges_folded(t, x, n) || hoc_element_interior_folded(t, x, n);
+}
+
+int hoc_element_fold_point(const hoc_quality_tables *t, const double *x, const double *n,
+                           double rs[2]) {
+  return hoc_element_edges_fold_point(t, x, n, rs) || hoc_element_interior_fold_point(t, x, n, rs);
 }

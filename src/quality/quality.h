@@ -65,6 +65,7 @@ typedef struct hoc_quality_tables {
   double *Mb; /* multinomials |a|! / (a0! a1! a2!) of the degrees p - 1, 2p - 2, p, 3p - 2 */
   double *Pb; /* the products' weights C(a) C(c) / C(a + c): [n(p-1)][n(p-1)], then
                * [n(2p-2)][np] (n(m): coefficients of degree m) */
+  struct hoc_lagrange *basis; /* the Lagrange basis on rs (points other than the tables') */
 } hoc_quality_tables;
 
 enum { HOC_QB = 4, HOC_EDGE_REFINE = 4 };
@@ -204,6 +205,27 @@ int hoc_element_interior_folded(const hoc_quality_tables *t, const double *x, co
 
 /** The exact tests together: edges, then the whole triangle. */
 int hoc_element_folded(const hoc_quality_tables *t, const double *x, const double *n);
+
+/** hoc_element_edges_folded, hoc_element_interior_folded and
+ *  hoc_element_folded that also say where: on a fold, rs[2] receives the
+ *  reference coordinates of a point where sigma < 0 (the end or corner of
+ *  the subdivision's piece found negative: the Bernstein coefficient there
+ *  is sigma's value; the piece's centre if sigma is degenerate). */
+int hoc_element_edges_fold_point(const hoc_quality_tables *t, const double *x, const double *n,
+                                 double rs[2]);
+int hoc_element_interior_fold_point(const hoc_quality_tables *t, const double *x, const double *n,
+                                    double rs[2]);
+int hoc_element_fold_point(const hoc_quality_tables *t, const double *x, const double *n,
+                           double rs[2]);
+
+/** One residual at reference point rs[2] with weight w (a fold point, for
+ *  untangling folds between the samples): r = sqrt(w) (eta - 1) there and
+ *  J [np][3] = d r / d x_i (need as for hoc_element_residuals; J may be
+ *  NULL). Returns sigma / |D phi|^2 there (NaN if rs is not usable). */
+double hoc_element_point_residual(const hoc_quality_tables *t, hoc_measure measure,
+                                  const double *x, const double *n, double delta,
+                                  const double rs[2], double w, const unsigned char *need,
+                                  double *r, double *J);
 
 /** The rest of the tangle test, given the quadrature points' smallest
  *  sigma (the residual functions return it): 1 if sigma <= 0 at a node or

@@ -39,6 +39,7 @@ static void tables_free(hoc_quality_tables *t) {
   free(t->Cb);
   free(t->Mb);
   free(t->Pb);
+  hoc_lagrange_destroy(&t->basis);
   free(t);
 }
 
@@ -152,7 +153,7 @@ static hoc_status build(int p, hoc_nodeset set, int degree, hoc_quality_tables *
       t->Bw[k] = k < t->nq ? t->w[k] : 0.0;
     }
   }
-  hoc_lagrange_destroy(&basis);
+  t->basis = basis; /* kept for hoc_element_point_residual */
   hoc_quadrature_free(&quad);
   free(dN);
   *out = t;
