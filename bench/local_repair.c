@@ -3,8 +3,9 @@
  * writes: the first optimisation's result), split its tangled elements,
  * and optimise only the children and two rings around them
  * (hoc_optimize_options.free_elements), printing each sweep's tangled
- * count and the result.
- * usage: local_repair MODEL IN.msh [red-green|longest-edge [OUT.msh]]
+ * count and the result. With `none`, nothing is split: the tangled
+ * elements and two rings around them are optimised as they are.
+ * usage: local_repair MODEL IN.msh [red-green|longest-edge|none [OUT.msh]]
  *        (OMP_NUM_THREADS threads)
  * SPDX-License-Identifier: GPL-2.0-or-later */
 #include "hocad.h"
@@ -29,12 +30,13 @@ static int fail(const char *what) {
 
 int main(int argc, char **argv) {
   if (argc < 3 || argc > 5) {
-    fprintf(stderr, "usage: local_repair MODEL IN.msh [red-green|longest-edge [OUT.msh]]\n");
+    fprintf(stderr, "usage: local_repair MODEL IN.msh [red-green|longest-edge|none [OUT.msh]]\n");
     return 2;
   }
   hoc_split_kind kind = HOC_SPLIT_RED_GREEN;
+  int split = !(argc > 3 && !strcmp(argv[3], "none"));
   if (argc > 3 && !strcmp(argv[3], "longest-edge")) kind = HOC_SPLIT_LONGEST_EDGE;
-  else if (argc > 3 && strcmp(argv[3], "red-green")) {
+  else if (argc > 3 && split && strcmp(argv[3], "red-green")) {
     fprintf(stderr, "local_repair: unknown split '%s'\n", argv[3]);
     return 2;
   }
@@ -60,7 +62,12 @@ int main(int argc, char **argv) {
     goto done;
   }
   printf("input: %zu elements, %zu tangled\n", ne, s.tangled);
-  if (hoc_mesh_split(mesh, tangled, kind, &fine, pieces) != HOC_OK) {
+  if (!split) { /* the same elements: the tangled ones are the region's core */
+    if (hoc_mesh_copy(mesh, &fine) != HOC_OK) {
+      code = fail("copy");
+      goto done;
+    }
+  } else if (hoc_mesh_split(mesh, tangled, kind, &fine, pieces) != HOC_OK) {
     code = fail("split");
     goto done;
   }
@@ -69,14 +76,16 @@ int main(int argc, char **argv) {
     fprintf(stderr, "local_repair: out of memory\n");
     goto done;
   }
-  for (size_t e = 0; e < ne; j += pieces[e++])
+  if (!split) memcpy(children, tangled, ne);
+  for (size_t e = 0; split && e < ne; j += pieces[e++])
     for (size_t c = j; c < j + pieces[e] && c < nf; ++c) children[c] = pieces[e] > 1;
   if (hoc_mesh_measure(fine, HOC_MEASURE_SHAPE, NULL, NULL, &s) != HOC_OK) {
     code = fail("measure");
     goto done;
   }
   printf("split (%s): %zu elements, %zu tangled\n",
-         kind == HOC_SPLIT_RED_GREEN ? "red-green" : "longest edge", nf, s.tangled);
+         !split ? "none" : kind == HOC_SPLIT_RED_GREEN ? "red-green" : "longest edge", nf,
+         s.tangled);
   hoc_optimize_options o;
   hoc_optimize_options_default(&o);
   o.progress = progress;
