@@ -39,10 +39,14 @@ for m in $list; do
       echo "$m p=$p: hocad failed (exit $rc)"
       continue
     fi
-    ne=$(jget "$work/r.json" optimized elements)
-    t0=$(jget "$work/r.json" high-order tangled) t1=$(jget "$work/r.json" optimized tangled)
-    l_min=$(jget "$work/r.json" linear min) o_min=$(jget "$work/r.json" optimized min)
-    l_mean=$(jget "$work/r.json" linear mean) o_mean=$(jget "$work/r.json" optimized mean)
+    # the final stage: "smoothed" if hocad made one (elements below the
+    # bound optimised once more), else "optimized"
+    fin=optimized
+    grep -q '"name": "smoothed"' "$work/r.json" && fin=smoothed
+    ne=$(jget "$work/r.json" $fin elements)
+    t0=$(jget "$work/r.json" high-order tangled) t1=$(jget "$work/r.json" $fin tangled)
+    l_min=$(jget "$work/r.json" linear min) o_min=$(jget "$work/r.json" $fin min)
+    l_mean=$(jget "$work/r.json" linear mean) o_mean=$(jget "$work/r.json" $fin mean)
     verdict=$(awk -v t="$t1" -v lm="$l_min" -v om="$o_min" -v la="$l_mean" -v oa="$o_mean" 'BEGIN {
       v = ""; if (t > 0) v = v t " tangled; ";
       if (om < 0.9 * lm) v = v "min q below 0.9 x linear; ";

@@ -230,6 +230,8 @@ static const char *usage_mesh =
     "raise them to order P (new nodes placed in each face's parametric space and\n"
     "mapped onto the surface; nodes on CAD curves placed on the curves), and\n"
     "report the quality q = 1/eta of every stage (eta: the seed's Definition 2).\n"
+    "Elements an untangled result has below 0.9 x the linear mesh's min q are\n"
+    "optimised once more with two rings around them (a 'smoothed' stage).\n"
     "\n"
     "options:\n"
     "  -p, --order P        element order, 1..15 (default 3)\n"
@@ -446,7 +448,7 @@ typedef struct stage {
 } stage;
 
 typedef struct report {
-  stage stages[5];
+  stage stages[6];
   int n;
   double write_seconds; /* writing the mesh files */
   double model_seconds; /* reading the CAD model */
@@ -1053,6 +1055,54 @@ static int refine_faces(const options *o, report *r, const hoc_model *model, con
   return EXIT_OK;
 }
 
+/* Elements an untangled optimised mesh *mesh has below 0.9 x the linear
+ * mesh's min q (the bound hocad aims at): their nodes and those of
+ * LOCAL_RINGS rings around them optimised once more, alone (a stage
+ * "smoothed"). Kept only if that raises the min q: the objective is a sum
+ * over the elements, not their minimum. (The aircraft at order 10: its
+ * splits next to a CAD curve 0.002 long, at the wing root, left 0.00197
+ * against a linear 0.00230; this gives 0.00219 in 8 s.) */
+static int smooth_low(const options *o, report *r, hoc_mesh **mesh) {
+  const stage *last = &r->stages[r->n - 1];
+  double bound = 0.9 * r->stages[0].stats.min;
+  if (!last->optimized || last->stats.tangled || !(last->stats.min < bound)) return EXIT_OK;
+  size_t ne = hoc_mesh_num_elements(*mesh), n_low = 0;
+  double *q = NULL;
+  unsigned char *low = calloc(ne ? ne : 1, 1);
+  hoc_mesh *copy = NULL;
+  int code = low ? measure_all(o, *mesh, &q, NULL) : (error_line("out of memory"), EXIT_FAILURE_);
+  hoc_status st = code ? HOC_OK : hoc_mesh_copy(*mesh, &copy);
+  if (!code && st != HOC_OK) code = fail(st, 0);
+  for (size_t e = 0; !code && e < ne; ++e) {
+    low[e] = q[e] < bound;
+    n_low += low[e];
+  }
+  report trial = *r;
+  if (!code && !o->quiet)
+    fprintf(stderr,
+            "%s: %zu element(s) below 0.9 x the linear mesh's min q (%.4f); optimising them "
+            "and two rings around them once more\n",
+            program, n_low, r->stages[0].stats.min);
+  if (!code) code = optimize_stage(o, &trial, copy, low);
+  if (!code) {
+    stage *sm = &trial.stages[trial.n - 1];
+    sm->name = "smoothed";
+    if (!sm->stats.tangled && sm->stats.min > last->stats.min) {
+      hoc_mesh_destroy(mesh);
+      *mesh = copy;
+      copy = NULL;
+      *r = trial;
+    } else if (!o->quiet) {
+      fprintf(stderr, "%s: note: that did not raise the min q (%.4f): kept the mesh before\n",
+              program, sm->stats.min);
+    }
+  }
+  hoc_mesh_destroy(&copy);
+  free(q);
+  free(low);
+  return code;
+}
+
 /* Free the meshes *to[0..2] and move *from[0..2] into them (leaving NULL). */
 static void move_meshes(hoc_mesh **to[3], hoc_mesh **from[3]) {
   for (int i = 0; i < 3; ++i) {
@@ -1253,6 +1303,10 @@ static int cmd_mesh(int argc, char **argv) {
       hoc_mesh_destroy(&ho);
       hoc_mesh_destroy(&lin);
     }
+  }
+  if (final == ho && o.optimize && o.order > 1) {
+    if ((code = smooth_low(&o, &r, &ho))) goto done;
+    final = ho;
   }
   /* files hold equispaced nodes: measure what is written */
   if (o.nodes != HOC_NODES_EQUISPACED && o.order >= 3 && (out || o.vtu)) {
