@@ -117,6 +117,22 @@ static void curved_element(const hoc_quality_tables *t, double amp, double *x) {
     for (int k = 0; k < 3; ++k) x[3 * i + k] += amp * (rnd() - 0.5);
 }
 
+/* A random curved element of order p (curved_element), normals tilted at
+ * random from +z, and if `fold`, its corners 1 and 2 swapped: tangled. */
+static void random_element(const hoc_quality_tables *t, int p, int fold, double *x, double *n) {
+  curved_element(t, 0.3 / p, x);
+  for (int i = 0; i < t->np; ++i) {
+    double nz[3] = {0.05 * (rnd() - 0.5), 0.05 * (rnd() - 0.5), 1};
+    memcpy(n + 3 * i, nz, sizeof nz);
+  }
+  if (fold) {
+    double tmp[3];
+    memcpy(tmp, x + 3, sizeof tmp);
+    memcpy(x + 3, x + 6, sizeof tmp);
+    memcpy(x + 6, tmp, sizeof tmp);
+  }
+}
+
 /* eta is invariant under rotation, scaling and translation (with the normals
  * rotated too). */
 static void test_invariance(void) {
@@ -213,17 +229,7 @@ static void test_gradients(void) {
     double *r = calloc(nq, sizeof *r), *rp = calloc(nq, sizeof *rp), *rm = calloc(nq, sizeof *rm);
     double *J = calloc(nq * np * 3, sizeof *J);
     for (int trial = 0; trial < 6; ++trial) {
-      curved_element(t, 0.3 / p, x);
-      for (size_t i = 0; i < np; ++i) {
-        double nz[3] = {0.05 * (rnd() - 0.5), 0.05 * (rnd() - 0.5), 1};
-        memcpy(n + 3 * i, nz, sizeof nz);
-      }
-      if (trial >= 3) { /* fold the element: tangled, regularised */
-        double tmp[3];
-        memcpy(tmp, x + 3, sizeof tmp);
-        memcpy(x + 3, x + 6, sizeof tmp);
-        memcpy(x + 6, tmp, sizeof tmp);
-      }
+      random_element(t, p, trial >= 3, x, n); /* folded: tangled, regularised */
       for (int meas = 0; meas < 2; ++meas) {
         double delta = trial >= 3 ? 0.05 : (trial == 2 ? 1e-3 : 0.0);
         double smin = hoc_element_residuals(t, (hoc_measure)meas, x, n, delta, NULL, r, J);
@@ -294,17 +300,7 @@ static void test_point_residual(void) {
     double *Jm = calloc(np * 3, sizeof *Jm);
     unsigned char *need = calloc(np, 1);
     for (int trial = 0; trial < 4; ++trial) {
-      curved_element(t, 0.3 / p, x);
-      for (size_t i = 0; i < np; ++i) {
-        double nz[3] = {0.05 * (rnd() - 0.5), 0.05 * (rnd() - 0.5), 1};
-        memcpy(n + 3 * i, nz, sizeof nz);
-      }
-      if (trial >= 2) { /* folded */
-        double tmp[3];
-        memcpy(tmp, x + 3, sizeof tmp);
-        memcpy(x + 3, x + 6, sizeof tmp);
-        memcpy(x + 6, tmp, sizeof tmp);
-      }
+      random_element(t, p, trial >= 2, x, n);
       double delta = trial % 2 ? 1e-3 : (trial >= 2 ? 0.05 : 0.0);
       hoc_element_residuals(t, HOC_MEASURE_SHAPE, x, n, delta, NULL, r, NULL);
       double worst = 0;
@@ -482,17 +478,7 @@ static void test_residuals_pointwise(void) {
     double *x = calloc(3 * np, sizeof *x), *n = calloc(3 * np, sizeof *n);
     double *r = calloc(nq, sizeof *r), *J = calloc(nq * np * 3, sizeof *J);
     for (int trial = 0; trial < 5; ++trial) {
-      curved_element(t, 0.3 / p, x);
-      for (size_t i = 0; i < np; ++i) {
-        double nz[3] = {0.05 * (rnd() - 0.5), 0.05 * (rnd() - 0.5), 1};
-        memcpy(n + 3 * i, nz, sizeof nz);
-      }
-      if (trial >= 2) { /* folded */
-        double tmp[3];
-        memcpy(tmp, x + 3, sizeof tmp);
-        memcpy(x + 3, x + 6, sizeof tmp);
-        memcpy(x + 6, tmp, sizeof tmp);
-      }
+      random_element(t, p, trial >= 2, x, n);
       if (trial == 4) /* degenerate: a1 x a2 = 0 everywhere */
         for (size_t i = 0; i < np; ++i) x[3 * i + 1] = x[3 * i + 2] = 0;
       for (int meas = 0; meas < 2; ++meas)
