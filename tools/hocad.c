@@ -1061,7 +1061,7 @@ static int refine_faces(const options *o, report *r, const hoc_model *model, con
  * "smoothed"). Kept only if that raises the min q: the objective is a sum
  * over the elements, not their minimum. (The aircraft at order 10: its
  * splits next to a CAD curve 0.002 long, at the wing root, left 0.00197
- * against a linear 0.00230; this gives 0.00219 in 8 s.) */
+ * against a linear 0.00230; this gives 0.00219 in 7 s.) */
 static int smooth_low(const options *o, report *r, hoc_mesh **mesh) {
   const stage *last = &r->stages[r->n - 1];
   double bound = 0.9 * r->stages[0].stats.min;
