@@ -468,11 +468,7 @@ double hoc_element_point_residual(const hoc_quality_tables *t, hoc_measure measu
     hoc_error_clear();
     return NAN;
   }
-  const double inv_sqrt3 = 0.57735026918962576451; /* W^{-T}, as the tables' */
-  for (int i = 0; i < np; ++i) {
-    G[2 * i] = dN[2 * i];
-    G[2 * i + 1] = (2 * dN[2 * i + 1] - dN[2 * i]) * inv_sqrt3;
-  }
+  hoc_quality_to_ideal((size_t)np, dN, G);
   double a1[3] = {0, 0, 0}, a2[3] = {0, 0, 0}, nq[3] = {0, 0, 0};
   for (int i = 0; i < np; ++i)
     for (int d = 0; d < 3; ++d) {

@@ -218,6 +218,10 @@ int hoc_element_interior_fold_point(const hoc_quality_tables *t, const double *x
 int hoc_element_fold_point(const hoc_quality_tables *t, const double *x, const double *n,
                            double rs[2]);
 
+/** Ideal-space gradients of n basis functions: G[n][2] = grad_{x~} N =
+ *  W^{-T} grad_xi N with W = [1 1/2; 0 sqrt(3)/2], from dN[n][2]. */
+void hoc_quality_to_ideal(size_t n, const double *dN, double *G);
+
 /** One residual at reference point rs[2] with weight w (a fold point, for
  *  untangling folds between the samples): r = sqrt(w) (eta - 1) there and
  *  J [np][3] = d r / d x_i (need as for hoc_element_residuals; J may be

@@ -43,8 +43,7 @@ static void tables_free(hoc_quality_tables *t) {
   free(t);
 }
 
-/* grad_{x~} N = W^{-T} grad_xi N with W = [1 1/2; 0 sqrt(3)/2] */
-static void to_ideal(size_t n, const double *dN, double *G) {
+void hoc_quality_to_ideal(size_t n, const double *dN, double *G) {
   const double inv_sqrt3 = 0.57735026918962576451;
   for (size_t k = 0; k < n; ++k) {
     double dr = dN[2 * k], ds = dN[2 * k + 1];
@@ -80,9 +79,9 @@ static hoc_status build(int p, hoc_nodeset set, int degree, hoc_quality_tables *
   for (size_t q = 0; q < nq; ++q) t->w[q] = quad.w[q] / wsum;
   HOC_TRY_GOTO(hoc_lagrange_create(p, t->rs, &basis), fail);
   HOC_TRY_GOTO(hoc_lagrange_eval(basis, quad.n, quad.rs, t->N, dN), fail);
-  to_ideal(nq * np, dN, t->G);
+  hoc_quality_to_ideal(nq * np, dN, t->G);
   HOC_TRY_GOTO(hoc_lagrange_eval(basis, t->np, t->rs, NULL, dN), fail);
-  to_ideal(np * np, dN, t->Gn);
+  hoc_quality_to_ideal(np * np, dN, t->Gn);
   HOC_TRY_GOTO(hoc_quality_edge_tables(t, basis), fail);
   HOC_TRY_GOTO(hoc_quality_interior_tables(t), fail);
   {
@@ -115,7 +114,7 @@ static hoc_status build(int p, hoc_nodeset set, int degree, hoc_quality_tables *
         if (i % HOC_EDGE_REFINE)
           hoc_quality_edge_point(e, (double)i / (m * HOC_EDGE_REFINE), pts + 2 * k++);
     status = hoc_lagrange_eval(basis, t->nv, pts, t->Nv, dv);
-    if (status == HOC_OK) to_ideal(nv * np, dv, t->Gv);
+    if (status == HOC_OK) hoc_quality_to_ideal(nv * np, dv, t->Gv);
     free(pts);
     free(dv);
     if (status != HOC_OK) goto fail;
