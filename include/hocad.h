@@ -355,6 +355,8 @@ typedef struct hoc_optimize_result {
                              on the exact verdict around each element the sweeps left tangled
                              (when at most 32 are) */
   size_t free_nodes;    /**< nodes the optimiser could move */
+  size_t fragile;       /**< elements guarded as fragile: above order 5, those valid at the start
+                             with q < 0.1, which no step may fold between the samples */
   double seconds;
 } hoc_optimize_result;
 

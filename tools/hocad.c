@@ -444,6 +444,7 @@ typedef struct stage {
   int exact_phase;      /* first sweep of its exact phase, or 0 */
   int protected_run;    /* first sweep of the kept protected run, or 0 */
   size_t polished;      /* elements the optimiser's final polish untangled */
+  size_t fragile;       /* elements it guarded as fragile */
   double objective_initial, objective;
 } stage;
 
@@ -546,10 +547,11 @@ static int write_json(const char *path, const options *o, const report *r, const
       text_add(&t,
                ", \"iterations\": %d, \"converged\": %s, \"best_iteration\": %d, "
                "\"second_attempt\": %d, \"exact_phase\": %d, \"protected_run\": %d, "
-               "\"polished\": %zu, \"objective_initial\": %.17g, "
+               "\"polished\": %zu, \"fragile\": %zu, \"objective_initial\": %.17g, "
                "\"objective\": %.17g",
                s->iterations, s->converged ? "true" : "false", s->best_iteration, s->second_attempt,
-               s->exact_phase, s->protected_run, s->polished, s->objective_initial, s->objective);
+               s->exact_phase, s->protected_run, s->polished, s->fragile, s->objective_initial,
+               s->objective);
     text_add(&t, "}");
   }
   text_add(&t,
@@ -674,6 +676,7 @@ static int optimize_stage(const options *o, report *r, hoc_mesh *mesh,
   s->exact_phase = res.exact_phase;
   s->protected_run = res.protected_run;
   s->polished = res.polished;
+  s->fragile = res.fragile;
   s->objective_initial = res.objective_initial;
   s->objective = res.objective_final;
   return EXIT_OK;

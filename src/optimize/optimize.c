@@ -111,6 +111,7 @@ typedef struct opt {
                                  may not fold it between samples (one folded there already may
                                  stay so for a while) */
   int protect;                /* a protected run (see hoc_mesh_optimize) */
+  unsigned char *fragile;     /* [n_elems] guarded as in a protected run (see mark_fragile) */
   unsigned char *on_boundary; /* [n_elems] has a node on a CAD curve or vertex: kept unfolded in
                            (u,v) so no node leaves the trimmed face (inside, 3D validity of
                            the neighbours is the barrier) */
@@ -174,7 +175,8 @@ static void opt_free(opt *o) {
                o->fe,        o->qe,          o->hsize,   o->active,     o->moving,   o->step,
                o->alpha,     o->f0,          o->fnew,    o->slope,      o->state,    o->list,
                o->committed, o->tpar,        o->txyz,    o->tdz,        o->tslot_uv, o->tnormal,
-               o->xvalid,    o->near,        o->near_e,  o->touched,    o->has_fold, o->fold_rs};
+               o->xvalid,    o->near,        o->near_e,  o->touched,    o->has_fold, o->fold_rs,
+               o->fragile};
   for (size_t i = 0; i < sizeof p / sizeof *p; ++i) free(p[i]);
 }
 
@@ -574,6 +576,8 @@ static hoc_status setup(opt *o, hoc_mesh *m, hoc_measure measure, int fix_curves
   HOC_ALLOC(o->delta, ne);
   HOC_ALLOC(o->valid, ne);
   HOC_ALLOC(o->xvalid, ne);
+  HOC_ALLOC(o->fragile, ne);
+  memset(o->fragile, 0, ne);
   HOC_ALLOC(o->pvalid, ne);
   HOC_ALLOC(o->on_boundary, ne);
   for (size_t e = 0; e < ne; ++e)
@@ -779,6 +783,10 @@ static int elem_residuals(const opt *o, size_t e, const double *x, const double 
 
 /* Per-element state at the start of a sweep: validity, parametric
  * validity, regularisation; also f, q and the tangled count. */
+/* Element e may not fold between the samples (its steps run the exact
+ * tests): every element of a protected run, the fragile ones of any run. */
+static int guarded(const opt *o, size_t e) { return o->protect || o->fragile[e]; }
+
 static hoc_status sweep_start(opt *o, double *objective, double *min_q, size_t *tangled) {
   hoc_mesh *m = o->m;
   size_t ne = m->n_elems;
@@ -801,7 +809,7 @@ static hoc_status sweep_start(opt *o, double *objective, double *min_q, size_t *
       double eta;
       qe[e] = hoc_element_quality_test(o->t, o->measure, x, n, o->exact, &eta, NULL);
       o->valid[e] = qe[e] > 0;
-      o->xvalid[e] = o->valid[e] && (o->exact || !o->protect || !hoc_element_folded(o->t, x, n));
+      o->xvalid[e] = o->valid[e] && (o->exact || !guarded(o, e) || !hoc_element_folded(o->t, x, n));
       o->pvalid[e] = (unsigned char)param_valid(o, e, uv);
       o->delta_own[e] = 0;
       /* a fold the samples miss: a residual where the exact tests found it
@@ -1213,10 +1221,24 @@ static int line_monotone(const opt *o, size_t l) {
  * after 40, in half the time; splitting them is `hocad`'s next step) */
 #define EXACT_STALL_SWEEPS 15
 
+/* Orders above this have no protected run (hoc_mesh_optimize; its exact
+ * tests in every trial cost too much there), no relaxed elements, and
+ * fragile elements (mark_fragile). */
+#define PROTECT_MAX_ORDER 5
+
 /* While untangling stalls (a raised regularisation), the valid neighbours
  * of tangled elements may pass through sigma = 0 for a while: some folds
- * only open by moving their neighbourhood through an invalid state. */
-static int relaxed(const opt *o, size_t e) { return o->region[e] && o->eps > 2e-3; }
+ * only open by moving their neighbourhood through an invalid state. Not
+ * above PROTECT_MAX_ORDER: there the relaxed region folds between the
+ * samples more than it opens, and the exact phase cannot open those folds
+ * again (the bottle at order 10: 8 tangled at sweep 11, then 22-231 while
+ * relaxed, 19 left; never relaxed, with its fragile elements guarded, 0
+ * after 59 sweeps, 252 s, where it had taken 1 441 s to leave 19. The
+ * aircraft at order 10 ends with 0 either way, after splits of the 5 or 3
+ * its first optimisation leaves, in 1 725 s or 1 048 s.) */
+static int relaxed(const opt *o, size_t e) {
+  return o->region[e] && o->eps > 2e-3 && o->m->order <= PROTECT_MAX_ORDER;
+}
 
 /* In the second attempt (relax_uv), relaxed elements on a face's boundary
  * may also fold in (u, v): on a regular parametrisation that is the same
@@ -1258,7 +1280,7 @@ static int block_trial_flagged(const opt *o, size_t b, scratch *s, double fmax, 
     size_t e = o->B->be_elem[a];
     if (!o->valid[e] || relaxed(o, e)) continue;
     gather(o, e, s->x, s->n);
-    if (hoc_element_nodes_tangled(o->t, s->x, s->n, o->exact || (o->protect && o->xvalid[e])))
+    if (hoc_element_nodes_tangled(o->t, s->x, s->n, o->exact || (guarded(o, e) && o->xvalid[e])))
       return 0;
   }
   return 1;
@@ -1495,7 +1517,7 @@ static hoc_status do_color(opt *o, int color, scratch *scr, int nthreads, size_t
         gather(o, e, s->x, s->n);
         if (!o->valid[e]) o->valid[e] = (unsigned char)!hoc_element_tangled(o->t, s->x, s->n, o->exact);
         o->xvalid[e] =
-            o->valid[e] && (o->exact || !o->protect || !hoc_element_folded(o->t, s->x, s->n));
+            o->valid[e] && (o->exact || !guarded(o, e) || !hoc_element_folded(o->t, s->x, s->n));
       }
       if (!o->pvalid[e]) o->pvalid[e] = (unsigned char)param_valid(o, e, s->uv);
     }
@@ -1808,6 +1830,31 @@ hoc_status hoc_mesh_polish(hoc_mesh *mesh, hoc_measure measure, int fix_curves, 
 /* One run of the optimiser from the mesh as it is (see hoc_mesh_optimize);
  * its sweeps are numbered from it0 + 1, its seconds from t0; *limited:
  * its first phase used all its sweeps with elements still tangled. */
+/* Quality below which a valid element is fragile. */
+#define FRAGILE_Q 0.1
+
+/* Above PROTECT_MAX_ORDER, in a whole-mesh run, the elements that start
+ * valid (exact test) with q < FRAGILE_Q are fragile: no step may fold them
+ * between the samples (guarded). Such an element, thin
+ * (aspect 20-50: the bottle's thread strip, one layer of 50 needles across
+ * a face 0.1 wide; the slivers at the aircraft's wing root), folds between
+ * the samples of a high order at node moves of a small share of its width,
+ * and once folded is seldom opened again: the bottle at order 10, never
+ * relaxed but unguarded, ended with 15 tangled, all on that strip and all
+ * valid at the start; guarded, with 0. They are few (50 of 20 670 on the bottle, 8 of 7 818 on the
+ * aircraft), so their exact tests cost little. Sets o->fragile from qe;
+ * returns how many. */
+static size_t mark_fragile(opt *o) {
+  const hoc_mesh *m = o->m;
+  size_t n = 0;
+  if (m->order <= PROTECT_MAX_ORDER || o->touched) return 0;
+  for (size_t e = 0; e < m->n_elems; ++e) {
+    o->fragile[e] = o->qe[e] > 0 && o->qe[e] < FRAGILE_Q;
+    n += o->fragile[e];
+  }
+  return n;
+}
+
 static hoc_status optimize_run(hoc_mesh *mesh, const hoc_optimize_options *options, int protect,
                                int it0, double t0, hoc_optimize_result *result, int *limited) {
   *limited = 0;
@@ -1853,6 +1900,7 @@ static hoc_status optimize_run(hoc_mesh *mesh, const hoc_optimize_options *optio
   ctx.exact = 1;
   HOC_TRY_GOTO(sweep_start(&ctx, &f, &qmin, &tangled), done);
   res.tangled_initial = tangled;
+  res.fragile = mark_fragile(&ctx);
   /* the first phase counts at the samples; a local repair (free_elements)
    * has no first phase: its few folds are counted by the exact test from
    * the start (the aircraft at order 10, a red-green split of its 11 folds:
@@ -2095,8 +2143,6 @@ done:
   opt_free(&ctx);
   return status;
 }
-
-#define PROTECT_MAX_ORDER 5
 
 hoc_status hoc_mesh_optimize(hoc_mesh *mesh, const hoc_optimize_options *options,
                              hoc_optimize_result *result) {
