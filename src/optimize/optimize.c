@@ -1228,16 +1228,20 @@ static int line_monotone(const opt *o, size_t l) {
 
 /* While untangling stalls (a raised regularisation), the valid neighbours
  * of tangled elements may pass through sigma = 0 for a while: some folds
- * only open by moving their neighbourhood through an invalid state. Not
- * above PROTECT_MAX_ORDER: there the relaxed region folds between the
- * samples more than it opens, and the exact phase cannot open those folds
- * again (the bottle at order 10: 8 tangled at sweep 11, then 22-231 while
- * relaxed, 19 left; never relaxed, with its fragile elements guarded, 0
- * after 59 sweeps, 252 s, where it had taken 1 441 s to leave 19. The
- * aircraft at order 10 ends with 0 either way, after splits of the 5 or 3
- * its first optimisation leaves, in 1 725 s or 1 048 s.) */
+ * only open by moving their neighbourhood through an invalid state. Fragile
+ * elements never (mark_fragile). Above PROTECT_MAX_ORDER only in the exact
+ * phase: in the first, the relaxed region folds between the samples more
+ * than it opens, and the exact phase cannot open those folds again (the
+ * bottle at order 10: 8 tangled at sweep 11, then 22-231 while relaxed, 19
+ * left after 130 sweeps and 1 441 s; relaxed only in the exact phase and
+ * with its fragile elements guarded, 0 after 59 sweeps, 252 s). In the
+ * exact phase the last folds may need it (periodic_u_cst at order 10: its
+ * one fold left there opens only so, 0 tangled, min q 0.258; never relaxed
+ * it stays, and the split after leaves min q 0.195 against a bound of
+ * 0.209). */
 static int relaxed(const opt *o, size_t e) {
-  return o->region[e] && o->eps > 2e-3 && o->m->order <= PROTECT_MAX_ORDER;
+  return o->region[e] && o->eps > 2e-3 && !o->fragile[e] &&
+         (o->m->order <= PROTECT_MAX_ORDER || o->exact);
 }
 
 /* In the second attempt (relax_uv), relaxed elements on a face's boundary
