@@ -306,10 +306,11 @@ static void test_cusp(void) {
   hoc_model_destroy(&model);
 }
 
-/* The optimiser returns the best state reached: on the bottle at order 6,
- * sweep 10 has more tangled elements than sweeps 6 to 9 (a raised
- * regularisation lets a fold's neighbours tangle), and a run stopped there
- * returns the state with the fewest, as measured afresh. */
+/* The bottle at order 6 stopped after 10 sweeps: a second attempt from the
+ * best state, the state with the fewest returned, as measured afresh; and,
+ * above order 5, a first phase whose count never rises (nothing relaxed;
+ * before that rule sweep 10 had more tangled elements than sweeps 6 to 9,
+ * a raised regularisation letting a fold's neighbours tangle). */
 typedef struct tangle_log {
   size_t count[16];
   int attempt[16];
@@ -379,7 +380,11 @@ static void test_best_state_kept(void) {
     if (i < 10 && log.count[i] < fewest_first) fewest_first = log.count[i];
     if (i && i < 10 && log.count[i] > log.count[i - 1]) rose = 1;
   }
-  CHECK(rose && log.count[9] > fewest_first); /* the case this test is about */
+  /* above order 5 the first phase relaxes nothing (optimize.c, relaxed):
+   * no valid element may turn tangled at the samples, so the count never
+   * rises there (before that rule it rose here, 4 -> more, and the best
+   * state was restored; an exact phase still may) */
+  CHECK(!rose && log.count[9] == fewest_first);
   /* the sweeps count by the samples (the first phase), the result by the
    * exact test too, as measuring does */
   CHECK(sampled_tangled(m) == fewest && fewest <= fewest_first);
