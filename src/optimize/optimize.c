@@ -781,12 +781,12 @@ static int elem_residuals(const opt *o, size_t e, const double *x, const double 
   return count + 1;
 }
 
-/* Per-element state at the start of a sweep: validity, parametric
- * validity, regularisation; also f, q and the tangled count. */
 /* Element e may not fold between the samples (its steps run the exact
  * tests): every element of a protected run, the fragile ones of any run. */
 static int guarded(const opt *o, size_t e) { return o->protect || o->fragile[e]; }
 
+/* Per-element state at the start of a sweep: validity, parametric
+ * validity, regularisation; also f, q and the tangled count. */
 static hoc_status sweep_start(opt *o, double *objective, double *min_q, size_t *tangled) {
   hoc_mesh *m = o->m;
   size_t ne = m->n_elems;
@@ -1222,8 +1222,8 @@ static int line_monotone(const opt *o, size_t l) {
 #define EXACT_STALL_SWEEPS 15
 
 /* Orders above this have no protected run (hoc_mesh_optimize; its exact
- * tests in every trial cost too much there), no relaxed elements, and
- * fragile elements (mark_fragile). */
+ * tests in every trial cost too much there), relaxed elements only in the
+ * exact phase, and fragile elements (mark_fragile). */
 #define PROTECT_MAX_ORDER 5
 
 /* While untangling stalls (a raised regularisation), the valid neighbours
@@ -1831,9 +1831,6 @@ hoc_status hoc_mesh_polish(hoc_mesh *mesh, hoc_measure measure, int fix_curves, 
   return status;
 }
 
-/* One run of the optimiser from the mesh as it is (see hoc_mesh_optimize);
- * its sweeps are numbered from it0 + 1, its seconds from t0; *limited:
- * its first phase used all its sweeps with elements still tangled. */
 /* Quality below which a valid element is fragile. */
 #define FRAGILE_Q 0.1
 
@@ -1845,9 +1842,10 @@ hoc_status hoc_mesh_polish(hoc_mesh *mesh, hoc_measure measure, int fix_curves, 
  * the samples of a high order at node moves of a small share of its width,
  * and once folded is seldom opened again: the bottle at order 10, never
  * relaxed but unguarded, ended with 15 tangled, all on that strip and all
- * valid at the start; guarded, with 0. They are few (50 of 20 670 on the bottle, 8 of 7 818 on the
- * aircraft), so their exact tests cost little. Sets o->fragile from qe;
- * returns how many. */
+ * valid at the start; guarded, with 0. They are few (50 of 20 670 on the
+ * bottle, 8 of 7 818 on the aircraft), so their exact tests cost little.
+ * Never relaxed either (relaxed). Sets o->fragile from qe; returns how
+ * many. */
 static size_t mark_fragile(opt *o) {
   const hoc_mesh *m = o->m;
   size_t n = 0;
@@ -1859,6 +1857,9 @@ static size_t mark_fragile(opt *o) {
   return n;
 }
 
+/* One run of the optimiser from the mesh as it is (see hoc_mesh_optimize);
+ * its sweeps are numbered from it0 + 1, its seconds from t0; *limited:
+ * its first phase used all its sweeps with elements still tangled. */
 static hoc_status optimize_run(hoc_mesh *mesh, const hoc_optimize_options *options, int protect,
                                int it0, double t0, hoc_optimize_result *result, int *limited) {
   *limited = 0;
