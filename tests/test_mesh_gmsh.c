@@ -13,6 +13,7 @@
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 /* A bundled model by file name, or NULL (the failure counted). */
 static hoc_model *open_bundled(const char *name) {
@@ -102,33 +103,46 @@ static void test_bad_input(void) {
   hoc_model *model = (hoc_model *)1;
   CHECK_STATUS(hoc_model_open("does-not-exist.step", &model), HOC_ERR_IO);
   CHECK(model == NULL);
-  FILE *f = fopen("empty.step", "w");
+  /* the bad files go to a directory of their own, removed afterwards */
+  char dir[] = "/tmp/hocad-test-XXXXXX";
+  CHECK(mkdtemp(dir) != NULL);
+  char empty[64], garbage[64], notcad[64], nogeom[64];
+  snprintf(empty, sizeof empty, "%s/empty.step", dir);
+  snprintf(garbage, sizeof garbage, "%s/garbage.step", dir);
+  snprintf(notcad, sizeof notcad, "%s/notcad.txt", dir);
+  snprintf(nogeom, sizeof nogeom, "%s/nogeom.step", dir);
+  FILE *f = fopen(empty, "w");
   if (f) fclose(f);
-  CHECK_STATUS(hoc_model_open("empty.step", &model), HOC_ERR_FORMAT);
-  f = fopen("garbage.step", "w");
+  CHECK_STATUS(hoc_model_open(empty, &model), HOC_ERR_FORMAT);
+  f = fopen(garbage, "w");
   if (f) {
     fputs("this is not a STEP file\n", f);
     fclose(f);
   }
-  CHECK_STATUS(hoc_model_open("garbage.step", &model), HOC_ERR_FORMAT);
-  f = fopen("notcad.txt", "w");
+  CHECK_STATUS(hoc_model_open(garbage, &model), HOC_ERR_FORMAT);
+  f = fopen(notcad, "w");
   if (f) {
     fputs("hello\n", f);
     fclose(f);
   }
-  CHECK_STATUS(hoc_model_open("notcad.txt", &model), HOC_ERR_FORMAT);
+  CHECK_STATUS(hoc_model_open(notcad, &model), HOC_ERR_FORMAT);
   CHECK(strstr(hoc_last_error(), "not a CAD file") != NULL);
   /* a valid STEP file with no geometry */
-  f = fopen("nogeom.step", "w");
+  f = fopen(nogeom, "w");
   if (f) {
     fputs("ISO-10303-21;\nHEADER;\nFILE_DESCRIPTION((''),'2;1');\nFILE_NAME('','',(''),(''),'','','');\n"
           "FILE_SCHEMA(('CONFIG_CONTROL_DESIGN'));\nENDSEC;\nDATA;\nENDSEC;\nEND-ISO-10303-21;\n",
           f);
     fclose(f);
   }
-  hoc_status st = hoc_model_open("nogeom.step", &model);
+  hoc_status st = hoc_model_open(nogeom, &model);
   CHECK(st == HOC_ERR_CAD || st == HOC_ERR_FORMAT);
   CHECK(model == NULL);
+  remove(empty);
+  remove(garbage);
+  remove(notcad);
+  remove(nogeom);
+  CHECK(rmdir(dir) == 0);
   /* after all that, a good model still opens */
   char path[1024];
   snprintf(path, sizeof path, "%s/screw.step", HOC_MODELS_DIR);
