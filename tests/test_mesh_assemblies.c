@@ -8,6 +8,9 @@
 
 #include <gmshc.h>
 #include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <unistd.h>
 
 static void make_models(void) {
   int ierr = 0;
@@ -75,8 +78,17 @@ static void run(const char *path, int expect_volumes) {
 }
 
 int main(void) {
+  /* the models are written into a directory of their own, removed afterwards */
+  char dir[] = "/tmp/hocad-test-XXXXXX";
+  if (!mkdtemp(dir) || chdir(dir) != 0) {
+    fprintf(stderr, "cannot make a scratch directory\n");
+    return 1;
+  }
   make_models();
   run("surfaces_only.brep", 0);
   run("assembly.step", 3);
+  remove("surfaces_only.brep");
+  remove("assembly.step");
+  CHECK(chdir("/") == 0 && rmdir(dir) == 0);
   return test_report();
 }
