@@ -78,10 +78,11 @@ static void run(const char *path, int expect_volumes) {
 }
 
 int main(void) {
-  /* the models are written into a directory of their own, removed afterwards */
-  char dir[] = "/tmp/hocad-test-XXXXXX";
-  if (!mkdtemp(dir) || chdir(dir) != 0) {
-    fprintf(stderr, "cannot make a scratch directory\n");
+  /* the models are written into a directory of their own (as in
+   * test_io_outfile), removed afterwards */
+  char own[] = "assemblies-test-XXXXXX", cwd[4096];
+  if (!mkdtemp(own) || !getcwd(cwd, sizeof cwd) || chdir(own) != 0) {
+    fprintf(stderr, "cannot make a working directory\n");
     return 1;
   }
   make_models();
@@ -89,6 +90,6 @@ int main(void) {
   run("assembly.step", 3);
   remove("surfaces_only.brep");
   remove("assembly.step");
-  CHECK(chdir("/") == 0 && rmdir(dir) == 0);
+  CHECK(chdir(cwd) == 0 && rmdir(own) == 0);
   return test_report();
 }

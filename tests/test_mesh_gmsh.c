@@ -98,43 +98,40 @@ static void test_gmsh_order3_t20(void) {
   hoc_model_destroy(&model);
 }
 
+/* Writes TEXT to DIR/NAME and puts that path in PATH. */
+static void write_scratch(const char *dir, const char *name, const char *text, char *path,
+                          size_t size) {
+  snprintf(path, size, "%s/%s", dir, name);
+  FILE *f = fopen(path, "w");
+  CHECK(f != NULL);
+  if (!f) return;
+  fputs(text, f);
+  fclose(f);
+}
+
 /* Bad input: one clear error, nothing open afterwards. */
 static void test_bad_input(void) {
   hoc_model *model = (hoc_model *)1;
   CHECK_STATUS(hoc_model_open("does-not-exist.step", &model), HOC_ERR_IO);
   CHECK(model == NULL);
-  /* the bad files go to a directory of their own, removed afterwards */
-  char dir[] = "/tmp/hocad-test-XXXXXX";
+  /* the bad files go to a directory of their own (as in test_io_outfile),
+   * removed afterwards */
+  char dir[] = "mesh-gmsh-test-XXXXXX";
   CHECK(mkdtemp(dir) != NULL);
   char empty[64], garbage[64], notcad[64], nogeom[64];
-  snprintf(empty, sizeof empty, "%s/empty.step", dir);
-  snprintf(garbage, sizeof garbage, "%s/garbage.step", dir);
-  snprintf(notcad, sizeof notcad, "%s/notcad.txt", dir);
-  snprintf(nogeom, sizeof nogeom, "%s/nogeom.step", dir);
-  FILE *f = fopen(empty, "w");
-  if (f) fclose(f);
+  write_scratch(dir, "empty.step", "", empty, sizeof empty);
   CHECK_STATUS(hoc_model_open(empty, &model), HOC_ERR_FORMAT);
-  f = fopen(garbage, "w");
-  if (f) {
-    fputs("this is not a STEP file\n", f);
-    fclose(f);
-  }
+  write_scratch(dir, "garbage.step", "this is not a STEP file\n", garbage, sizeof garbage);
   CHECK_STATUS(hoc_model_open(garbage, &model), HOC_ERR_FORMAT);
-  f = fopen(notcad, "w");
-  if (f) {
-    fputs("hello\n", f);
-    fclose(f);
-  }
+  write_scratch(dir, "notcad.txt", "hello\n", notcad, sizeof notcad);
   CHECK_STATUS(hoc_model_open(notcad, &model), HOC_ERR_FORMAT);
   CHECK(strstr(hoc_last_error(), "not a CAD file") != NULL);
   /* a valid STEP file with no geometry */
-  f = fopen(nogeom, "w");
-  if (f) {
-    fputs("ISO-10303-21;\nHEADER;\nFILE_DESCRIPTION((''),'2;1');\nFILE_NAME('','',(''),(''),'','','');\n"
-          "FILE_SCHEMA(('CONFIG_CONTROL_DESIGN'));\nENDSEC;\nDATA;\nENDSEC;\nEND-ISO-10303-21;\n",
-          f);
-    fclose(f);
-  }
+  write_scratch(dir, "nogeom.step",
+                "ISO-10303-21;\nHEADER;\nFILE_DESCRIPTION((''),'2;1');\n"
+                "FILE_NAME('','',(''),(''),'','','');\nFILE_SCHEMA(('CONFIG_CONTROL_DESIGN'));\n"
+                "ENDSEC;\nDATA;\nENDSEC;\nEND-ISO-10303-21;\n",
+                nogeom, sizeof nogeom);
   hoc_status st = hoc_model_open(nogeom, &model);
   CHECK(st == HOC_ERR_CAD || st == HOC_ERR_FORMAT);
   CHECK(model == NULL);
@@ -403,7 +400,8 @@ static void test_best_state_kept(void) {
    * exact test too, as measuring does */
   CHECK(sampled_tangled(m) == fewest && fewest <= fewest_first);
   int first = 0; /* the sweep after which the fewest were first reached */
-  while (first < log.n && log.count[first] != fewest) ++first;
+  while (first < log.n && log.count[first] != fewest)
+    ++first;
   CHECK(res.best_iteration == first + 1);
   hoc_quality_stats st;
   CHECK_OK(hoc_mesh_measure(m, HOC_MEASURE_SHAPE, NULL, NULL, &st));
@@ -448,14 +446,16 @@ static void test_refine_faces(void) {
   CHECK_STATUS(hoc_mesh_refine_bounds(lin, flag, 1.0, bound), HOC_ERR_ARGUMENT);
   CHECK_STATUS(hoc_mesh_refine_bounds(lin, NULL, 0.5, bound), HOC_ERR_ARGUMENT);
   CHECK_OK(hoc_mesh_refine_bounds(lin, flag, 0.5, bound));
-  for (int k = 0; k < nf; ++k) CHECK(k == f ? bound[k] == 0.5 * longest_edge(lin, big) : bound[k] == 0);
+  for (int k = 0; k < nf; ++k)
+    CHECK(k == f ? bound[k] == 0.5 * longest_edge(lin, big) : bound[k] == 0);
   hoc_linear_options lo;
   hoc_linear_options_default(&lo);
   lo.face_size = bound;
   CHECK_OK(hoc_mesh_generate_linear(model, &lo, &fine));
   size_t *before = calloc((size_t)nf, sizeof *before), *after = calloc((size_t)nf, sizeof *after);
   double worst = 0; /* longest edge on face f in the finer mesh */
-  for (size_t e = 0; e < lin->n_elems; ++e) before[lin->elem_face[e]]++;
+  for (size_t e = 0; e < lin->n_elems; ++e)
+    before[lin->elem_face[e]]++;
   for (size_t e = 0; fine && e < fine->n_elems; ++e) {
     after[fine->elem_face[e]]++;
     if (fine->elem_face[e] == f) worst = fmax(worst, longest_edge(fine, e));
