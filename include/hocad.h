@@ -422,26 +422,12 @@ hoc_status hoc_histogram_png(const char *path, int n, const hoc_mesh *const *mes
                              const double *const *quality, const char *const *titles,
                              const hoc_picture_options *options);
 
-/** Picture (and histogram, if histogram_path is not NULL) of a .msh file
- *  without its CAD model. Without the CAD normals, Definition 2 measures
- *  each element against the normal of the plane through its three corners
- *  (equal to the CAD's verdict on all but strongly curved elements).
- *  @param[out] stats  statistics of that measure, or NULL */
-hoc_status hoc_picture_msh_file(const char *msh_path, hoc_measure measure, const char *png_path,
-                                const char *histogram_path, const hoc_picture_options *options,
-                                hoc_quality_stats *stats);
-
 /* ------------------------------------------------------------------------ */
 /* Files                                                                    */
 
 /** Write `size` bytes to `path` atomically (temporary file in the same
  *  directory, then rename): the target is either the old file or the new. */
 hoc_status hoc_write_file_atomic(const char *path, const void *data, size_t size);
-
-/** From a signal handler: remove every temporary output file the library
- *  has open (async-signal-safe), so an interrupted run leaves the previous
- *  outputs intact and no partial file behind. */
-void hoc_abort_outputs_from_signal(void);
 
 #ifdef __cplusplus
 }

@@ -1,6 +1,7 @@
 /* hocad: the command-line tool. Options, progress, printing and exit codes
  * live here; the work is done by libhocad.
  * SPDX-License-Identifier: GPL-2.0-or-later */
+#include "core/cli_support.h"
 #include "hocad.h"
 
 #include <errno.h>

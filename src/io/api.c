@@ -1,5 +1,6 @@
 /* Public file helpers on top of the atomic output files.
  * SPDX-License-Identifier: GPL-2.0-or-later */
+#include "core/cli_support.h"
 #include "io/io.h"
 
 hoc_status hoc_write_file_atomic(const char *path, const void *data, size_t size) {

@@ -3,6 +3,7 @@
  * SPDX-License-Identifier: GPL-2.0-or-later
  */
 #include "basis/basis.h"
+#include "core/cli_support.h"
 #include "io/io.h"
 #include "mesh/mesh.h"
 #include "quality/quality.h"
