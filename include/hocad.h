@@ -3,6 +3,10 @@
  * Copyright (C) 2026 the hocad developers.
  * SPDX-License-Identifier: GPL-2.0-or-later
  *
+ * The method is the one of "the paper": A. Gargallo-Peiro, X. Roca,
+ * J. Peraire, J. Sarrate, High-order mesh generation on CAD geometries
+ * (definitions, tables and sections named below are that paper's).
+ *
  * The public interface. Every function that can fail returns a hoc_status;
  * on failure a one-line message is available from hoc_last_error() (it is
  * per thread and valid until the next failing call on that thread). The
@@ -15,8 +19,8 @@
  * The CAD kernel (gmsh) has one global model: only one hoc_model opened from
  * a file may exist at a time.
  */
-#ifndef HOCAD_H
-#define HOCAD_H
+#ifndef HOC_HOCAD_H
+#define HOC_HOCAD_H
 
 #include <stddef.h>
 
@@ -24,9 +28,9 @@
 extern "C" {
 #endif
 
-#define HOCAD_VERSION_MAJOR 0
-#define HOCAD_VERSION_MINOR 1
-#define HOCAD_VERSION_PATCH 0
+#define HOC_VERSION_MAJOR 0
+#define HOC_VERSION_MINOR 1
+#define HOC_VERSION_PATCH 0
 
 /** Highest element order the library builds and measures. */
 #define HOC_MAX_ORDER 15
@@ -61,7 +65,7 @@ typedef enum hoc_nodeset {
   HOC_NODES_WARP_BLEND = 2  /**< Warburton's warp & blend points */
 } hoc_nodeset;
 
-/** Jacobian-based distortion measure eta of the seed's Table 1 (d = 2). */
+/** Jacobian-based distortion measure eta of the paper's Table 1 (d = 2). */
 typedef enum hoc_measure {
   HOC_MEASURE_SHAPE = 0, /**< eta = |S|^2 / (2 sigma) */
   HOC_MEASURE_ODDY = 1   /**< eta = (3/2) sigma^-2 (|S^T S|^2 - |S|^4 / 3) */
@@ -133,7 +137,7 @@ hoc_status hoc_mesh_generate_linear(hoc_model *model, const hoc_linear_options *
  *  each element are placed in the face's parametric space by evaluating the
  *  element's parametric map at the reference nodes of the requested
  *  distribution, and mapped onto the surface; nodes on CAD curves are placed
- *  in the curve's parameter. From a linear mesh this is the seed's step 2
+ *  in the curve's parameter. From a linear mesh this is the paper's step 2
  *  (elements straight in (u,v), curve edges following the curves), with
  *  one exception: at a cusp corner (a CAD vertex where the element's two
  *  edges follow curves whose angle is under half the straight element's
@@ -202,7 +206,7 @@ hoc_status hoc_mesh_max_cad_distance(const hoc_mesh *mesh, double *distance);
 /* ------------------------------------------------------------------------ */
 /* Quality                                                                  */
 
-/** Statistics of q = 1/eta over a mesh (the seed's Table 2). */
+/** Statistics of q = 1/eta over a mesh (the paper's Table 2). */
 typedef struct hoc_quality_stats {
   size_t elements; /**< number of elements */
   int order;       /**< element order */
@@ -213,7 +217,7 @@ typedef struct hoc_quality_stats {
   double seconds;  /**< wall time of the measurement */
 } hoc_quality_stats;
 
-/** Measure every element with Definition 2 of the seed (surface high-order
+/** Measure every element with Definition 2 of the paper (surface high-order
  *  distortion through the tangent-plane embedding T).
  *  @param[in]  mesh     the mesh
  *  @param[in]  measure  shape or Oddy
@@ -432,4 +436,4 @@ hoc_status hoc_write_file_atomic(const char *path, const void *data, size_t size
 #ifdef __cplusplus
 }
 #endif
-#endif /* HOCAD_H */
+#endif /* HOC_HOCAD_H */

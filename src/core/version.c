@@ -2,8 +2,8 @@
  * SPDX-License-Identifier: GPL-2.0-or-later */
 #include "hocad.h"
 
-#ifndef HOCAD_VERSION_STRING
-#define HOCAD_VERSION_STRING "0.1.0"
+#ifndef HOC_VERSION_STRING
+#define HOC_VERSION_STRING "0.1.0"
 #endif
 
-const char *hoc_version(void) { return HOCAD_VERSION_STRING; }
+const char *hoc_version(void) { return HOC_VERSION_STRING; }
