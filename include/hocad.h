@@ -393,6 +393,211 @@ hoc_status hoc_mesh_check_gradient(hoc_mesh *mesh, hoc_measure measure, int fix_
                                    int samples, double *max_rel_error);
 
 /* ------------------------------------------------------------------------ */
+/* The method end to end: what `hocad mesh` and `hocad optimize` do         */
+
+/** One stage of a pipeline, measured: a row of the paper's Table 2. */
+typedef struct hoc_stage {
+  const char *name; /**< "linear", "high-order", "input", "re-placed", "split", "optimized",
+                         "smoothed" or "written" (a static string) */
+  hoc_quality_stats stats; /**< q of the stage's mesh */
+  double seconds;          /**< wall time to make the stage (measuring included) */
+  int optimized;           /**< the stage is an optimiser's result: the fields below are set */
+  int iterations;          /**< the optimiser's sweeps */
+  int converged;           /**< hoc_optimize_result.converged */
+  double objective_initial, objective; /**< f before and after */
+} hoc_stage;
+
+/** What a pipeline event is about. */
+typedef enum hoc_event_kind {
+  HOC_EVENT_PROGRESS = 0,  /**< a step starts ("optimizing 7020 elements") */
+  HOC_EVENT_STAGE = 1,     /**< a stage was measured (event->stage); a stage of an attempt
+                                the pipeline then drops is reported too */
+  HOC_EVENT_ITERATION = 2, /**< an optimiser sweep ended (event->iteration) */
+  HOC_EVENT_REPAIR = 3,    /**< elements are left tangled or poor and a repair starts (a split,
+                                meshing faces again, smoothing): how many, what, where */
+  HOC_EVENT_NOTE = 4,      /**< what the pipeline found or kept */
+  HOC_EVENT_WARNING = 5,   /**< what the result lacks (faces not meshed, tangled elements) */
+  HOC_EVENT_CHECK = 6      /**< the gradient check of hoc_mesh_options.check_gradient
+                                (event->value) */
+} hoc_event_kind;
+
+/** An event of a running pipeline. Every pointer is valid during the call only. */
+typedef struct hoc_event {
+  hoc_event_kind kind;
+  const char *message;     /**< one line, no newline, never NULL */
+  const hoc_stage *stage;  /**< HOC_EVENT_STAGE, else NULL */
+  const hoc_optimize_iteration *iteration; /**< HOC_EVENT_ITERATION, else NULL */
+  double value;            /**< HOC_EVENT_CHECK: the largest relative difference between the
+                                analytic gradient and central differences */
+} hoc_event;
+
+/** Called on each event; return nonzero to cancel: the pipeline then fails
+ *  with HOC_ERR_INTERRUPTED and returns neither a mesh nor a report. */
+typedef int (*hoc_event_fn)(void *user, const hoc_event *event);
+
+/** Options of hoc_mesh_model and hoc_mesh_repair (fill with
+ *  hoc_mesh_options_default, then change what differs). */
+typedef struct hoc_mesh_options {
+  int order;              /**< hoc_mesh_model: element order, 1..HOC_MAX_ORDER (default 3);
+                               hoc_mesh_repair keeps its input's */
+  hoc_nodeset nodeset;    /**< hoc_mesh_model: reference nodes (default equispaced) */
+  hoc_measure measure;    /**< distortion measure (default shape) */
+  double size, size_min, curvature; /**< hoc_mesh_model: the linear mesher's size_max,
+                               size_min and curvature (hoc_linear_options; 0: choose) */
+  const hoc_mesh *linear; /**< hoc_mesh_model: NULL, or a mesh of the model whose corners
+                               are the linear mesh (e.g. another mesher's), used instead of
+                               meshing; it is split where elements stay tangled, never
+                               meshed again */
+  int optimize;           /**< 1 (default): untangle and smooth; 0: stop after raising */
+  int fix_curves;         /**< hoc_optimize_options.fix_curves */
+  int max_iterations;     /**< hoc_optimize_options.max_iterations (0: its default) */
+  int refinements;        /**< where elements stay tangled: at most this many remeshings of
+                               their faces, and splits per chain (-1, the default: 2 for
+                               hoc_mesh_model, 3 with a given linear mesh, 6 for
+                               hoc_mesh_repair; 0: none) */
+  int keep_nodes;         /**< hoc_mesh_repair: optimise from the input's own high-order
+                               nodes only, never from nodes re-placed from its corners */
+  int equispaced;         /**< hoc_mesh_model: the result converted to equispaced nodes, what
+                               MSH and VTU files hold, and measured as a "written" stage when
+                               the node set differs (order 3 and above) */
+  int keep_stages;        /**< hoc_mesh_model: the report keeps the linear mesh and the raised
+                               one before optimisation (hoc_report_linear, hoc_report_raised) */
+  int check_gradient;     /**< before each optimisation, compare the analytic gradient with
+                               finite differences (hoc_mesh_check_gradient, HOC_EVENT_CHECK) */
+  hoc_event_fn event;     /**< NULL, or called on every event */
+  void *event_user;       /**< passed to event */
+} hoc_mesh_options;
+
+/** Fill options with the defaults: order 3, equispaced nodes, shape
+ *  measure, sizes chosen, optimised, curves free, default sweeps and
+ *  refinements (-1), no event callback. */
+void hoc_mesh_options_default(hoc_mesh_options *options);
+
+/** A pipeline's report: its stages, how often it refined, the quality of
+ *  its result and what it found about it. */
+typedef struct hoc_report hoc_report;
+
+/** `hocad mesh`: the paper's three steps and the repairs where they leave
+ *  elements tangled. (1) A linear mesh (hoc_mesh_generate_linear, or
+ *  options->linear), (2) raised to the order (hoc_mesh_elevate), (3)
+ *  optimised (hoc_mesh_optimize). Where elements stay tangled: first their
+ *  split on a copy (as hoc_mesh_repair splits), kept if it leaves none
+ *  tangled; else their faces meshed again with edges half as long and
+ *  (unless options->size_min is set) a minimum size ten times smaller,
+ *  unless that more than quadruples the mesh, and everything again, at
+ *  most `refinements` times; once that is spent, the attempt with the
+ *  fewest tangled elements split. An untangled result with elements below
+ *  0.9 x the linear mesh's min q has them and two rings around them
+ *  optimised once more (a "smoothed" stage, kept if it raises the min q).
+ *  @param[in]  model    the CAD model; it must outlive the mesh
+ *  @param[in]  options  NULL for defaults
+ *  @param[out] mesh     NULL, or the result (destroy with hoc_mesh_destroy); NULL on failure
+ *  @param[out] report   NULL, or the report (destroy with hoc_report_destroy); NULL on failure
+ *  Fails with HOC_ERR_ARGUMENT on an option out of range, HOC_ERR_MISMATCH
+ *  if options->linear is on another model, HOC_ERR_INTERRUPTED if the
+ *  event callback cancels; tangled elements left in the result are no
+ *  failure (see hoc_report_tangled). */
+hoc_status hoc_mesh_model(hoc_model *model, const hoc_mesh_options *options, hoc_mesh **mesh,
+                          hoc_report **report);
+
+/** `hocad optimize`: untangle and smooth any high-order mesh of a model
+ *  (e.g. another mesher's), refining it where it stays tangled. Where the
+ *  input is tangled, the optimiser starts from its corners with the
+ *  high-order nodes re-placed as hoc_mesh_model places them (a
+ *  "re-placed" stage) unless that tangles over 10% more elements than the
+ *  input or options->keep_nodes; if that stays tangled, from the input's
+ *  own nodes too, and the result with fewer tangled elements (then the
+ *  lower objective) is kept. Elements still tangled are split in two
+ *  chains taken in turn, red-green from the optimised result and at
+ *  longest edges from the mesh it was optimised from (hoc_mesh_split),
+ *  each split optimised again (from order 6 on, only the new elements and
+ *  two rings around them), until a result has no tangled element or each
+ *  chain made `refinements` splits; the result with the fewest tangled
+ *  elements is kept.
+ *  @param[in]  in       the mesh (order 2 and above to be optimised); it is not changed
+ *  @param[in]  options  NULL for defaults (order, nodeset, sizes, linear, optimize,
+ *                       equispaced and keep_stages are not used)
+ *  @param[out] mesh     NULL, or the result on the same model; NULL on failure
+ *  @param[out] report   NULL, or the report; NULL on failure */
+hoc_status hoc_mesh_repair(const hoc_mesh *in, const hoc_mesh_options *options, hoc_mesh **mesh,
+                           hoc_report **report);
+
+/** `hocad quality`: a report of one stage, "input", measuring a mesh.
+ *  @param[out] report  the report (destroy with hoc_report_destroy) */
+hoc_status hoc_mesh_quality_report(const hoc_mesh *mesh, hoc_measure measure,
+                                   hoc_report **report);
+
+/** Destroy a report (NULL allowed); clears *report. */
+void hoc_report_destroy(hoc_report **report);
+
+/** The stages of the result in order (a dropped attempt's are not kept):
+ *  hoc_mesh_model's "linear", "high-order" (order above 1), then any
+ *  "split", "optimized", "smoothed", "written"; hoc_mesh_repair's "input",
+ *  then any "re-placed" or "split", and "optimized". The last stage is the
+ *  result. */
+size_t hoc_report_num_stages(const hoc_report *report);
+/** Stage i (0-based), or NULL if out of range; valid while the report lives. */
+const hoc_stage *hoc_report_stage(const hoc_report *report, size_t i);
+/** The optimiser's whole result for stage i (its diagnostics may change
+ *  between versions), or NULL if the stage is not optimised. */
+const hoc_optimize_result *hoc_report_stage_result(const hoc_report *report, size_t i);
+
+/** Times tangled elements were meshed again finer: remeshings of their
+ *  faces and splits, those made in attempts not kept included. */
+int hoc_report_refinements(const hoc_report *report);
+/** Of those, remeshings of faces (hoc_mesh_model only). */
+int hoc_report_remeshings(const hoc_report *report);
+/** Tangled elements of the result (its last stage's count). */
+size_t hoc_report_tangled(const hoc_report *report);
+/** Faces the linear mesher could not mesh in the kept attempt (they have no
+ *  elements; hoc_mesh_model only). */
+int hoc_report_num_failed_faces(const hoc_report *report);
+/** Elements and nodes of the result. */
+size_t hoc_report_num_elements(const hoc_report *report);
+size_t hoc_report_num_nodes(const hoc_report *report);
+/** q of each element of the result, [hoc_report_num_elements] in element
+ *  order (0: tangled), as hoc_mesh_measure gives it; valid while the report
+ *  lives. */
+const double *hoc_report_quality(const hoc_report *report);
+
+/** What the report finds about the result, one line each: a warning
+ *  naming the tangled elements (up to 20) with why they stay tangled and
+ *  what may help; a note on elements below 0.9 x the linear mesh's min q
+ *  at a cusp of the CAD (hoc_cusp). */
+size_t hoc_report_num_findings(const hoc_report *report);
+/** Finding i, or NULL if out of range; *kind (if not NULL) is
+ *  HOC_EVENT_WARNING or HOC_EVENT_NOTE. */
+const char *hoc_report_finding(const hoc_report *report, size_t i, hoc_event_kind *kind);
+
+/** With hoc_mesh_options.keep_stages: the linear mesh of the result (a copy
+ *  at order 1), and the raised mesh before optimisation (NULL when not
+ *  optimised); else NULL. They belong to the report. */
+const hoc_mesh *hoc_report_linear(const hoc_report *report);
+const hoc_mesh *hoc_report_raised(const hoc_report *report);
+
+/** What the JSON report says that the pipeline does not know: the files
+ *  the caller read and the time it spent on them. */
+typedef struct hoc_report_files {
+  const char *model;    /**< "model": the model's file name (NULL: "") */
+  const char *mesh;     /**< "mesh": the input mesh's file name (NULL: no such key) */
+  double model_seconds; /**< "model_seconds": opening the model */
+  double write_seconds; /**< "write_seconds": writing the result */
+} hoc_report_files;
+
+/** The report as JSON: "command" ("mesh", "optimize" or "quality" after
+ *  hoc_mesh_model, hoc_mesh_repair, hoc_mesh_quality_report), "model",
+ *  "mesh", "measure", "version", "stages" (each with the optimiser's
+ *  diagnostics when optimised), "refinements", "remeshings", "nodes",
+ *  "model_seconds", "write_seconds"; numbers with 17 digits.
+ *  @param[in]  files  NULL, or the caller's files
+ *  @param[out] json   NUL-terminated text, free it with free(); NULL on failure */
+hoc_status hoc_report_json(const hoc_report *report, const hoc_report_files *files, char **json);
+
+/** hoc_report_json written to a file atomically. */
+hoc_status hoc_report_write_json(const hoc_report *report, const hoc_report_files *files,
+                                 const char *path);
+
+/* ------------------------------------------------------------------------ */
 /* Pictures                                                                 */
 
 /** Options of the pictures (PNG, drawn in software: no display, no GPU). */

@@ -1,0 +1,403 @@
+/* The drivers of the method end to end: hoc_mesh_model (`hocad mesh`: a
+ * linear mesh, raised, optimised, remeshed finer or split where it stays
+ * tangled), hoc_mesh_repair (`hocad optimize`: a given high-order mesh
+ * optimised and split) and hoc_mesh_quality_report (`hocad quality`).
+ * SPDX-License-Identifier: GPL-2.0-or-later */
+#include "mesh/mesh.h"
+#include "pipeline/pipeline.h"
+
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+double hoc_pipeline_now(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+hoc_status hoc_run_event(const hoc_run *run, hoc_event_kind kind, const char *fmt, ...) {
+  if (!run->o.event) return HOC_OK;
+  va_list ap;
+  va_start(ap, fmt);
+  int n = vsnprintf(NULL, 0, fmt, ap);
+  va_end(ap);
+  char *msg = n >= 0 ? malloc((size_t)n + 1) : NULL;
+  if (!msg) return HOC_ERROR(HOC_ERR_MEMORY, "out of memory for a message");
+  va_start(ap, fmt);
+  vsnprintf(msg, (size_t)n + 1, fmt, ap);
+  va_end(ap);
+  hoc_event ev = {.kind = kind, .message = msg};
+  int cancel = run->o.event(run->o.event_user, &ev);
+  free(msg);
+  return cancel ? HOC_ERROR(HOC_ERR_INTERRUPTED, "interrupted by the event callback") : HOC_OK;
+}
+
+hoc_status hoc_run_stage(const hoc_run *run, hoc_stages *r, const char *name,
+                         const hoc_mesh *mesh, double seconds, double *q,
+                         const hoc_optimize_result *result) {
+  HOC_CHECK(r->n < HOC_PIPELINE_MAX_STAGES, HOC_ERR_INTERNAL, "more than %d stages",
+            HOC_PIPELINE_MAX_STAGES);
+  hoc_stage_record *s = &r->s[r->n];
+  *s = (hoc_stage_record){0}; /* a slot reused after a refinement keeps nothing */
+  s->stage.name = name;
+  s->stage.seconds = seconds;
+  HOC_TRY(hoc_mesh_measure(mesh, run->o.measure, q, NULL, &s->stage.stats));
+  if (result) {
+    s->stage.optimized = 1;
+    s->stage.iterations = result->iterations;
+    s->stage.converged = result->converged;
+    s->stage.objective_initial = result->objective_initial;
+    s->stage.objective = result->objective_final;
+    s->result = *result;
+  }
+  r->n++;
+  if (!run->o.event) return HOC_OK;
+  hoc_event ev = {.kind = HOC_EVENT_STAGE, .message = name, .stage = &s->stage};
+  return run->o.event(run->o.event_user, &ev)
+             ? HOC_ERROR(HOC_ERR_INTERRUPTED, "interrupted by the event callback")
+             : HOC_OK;
+}
+
+/* Options ----------------------------------------------------------------- */
+
+void hoc_mesh_options_default(hoc_mesh_options *options) {
+  if (!options) return;
+  memset(options, 0, sizeof *options);
+  options->order = 3;
+  options->nodeset = HOC_NODES_EQUISPACED;
+  options->measure = HOC_MEASURE_SHAPE;
+  options->optimize = 1;
+  options->refinements = -1;
+}
+
+/* Check the options both pipelines use; run gets a copy (defaults if
+ * options is NULL). */
+static hoc_status run_start(hoc_run *run, const hoc_mesh_options *options) {
+  if (options) run->o = *options;
+  else hoc_mesh_options_default(&run->o);
+  const hoc_mesh_options *o = &run->o;
+  HOC_CHECK(o->measure == HOC_MEASURE_SHAPE || o->measure == HOC_MEASURE_ODDY, HOC_ERR_ARGUMENT,
+            "unknown distortion measure %d", (int)o->measure);
+  HOC_CHECK(o->max_iterations >= 0, HOC_ERR_ARGUMENT, "max_iterations %d is negative",
+            o->max_iterations);
+  HOC_CHECK(o->refinements >= -1, HOC_ERR_ARGUMENT,
+            "refinements %d out of range (-1 for the default, or 0 and above)", o->refinements);
+  return HOC_OK;
+}
+
+/* Free the meshes *to[0..2] and move *from[0..2] into them (leaving NULL). */
+static void move_meshes(hoc_mesh **to[3], hoc_mesh **from[3]) {
+  for (int i = 0; i < 3; ++i) {
+    hoc_mesh_destroy(to[i]);
+    *to[i] = *from[i];
+    *from[i] = NULL;
+  }
+}
+
+/* Faces the linear mesher skipped: a warning naming them (up to 30). */
+static hoc_status warn_failed_faces(const hoc_run *run, const hoc_mesh *lin) {
+  int nfail = hoc_mesh_num_failed_faces(lin);
+  if (!nfail) return HOC_OK;
+  char faces[400];
+  size_t len = 0;
+  faces[0] = '\0';
+  for (int i = 0; i < nfail && i < 30 && len < sizeof faces; ++i)
+    len += (size_t)snprintf(faces + len, sizeof faces - len, " %d",
+                            hoc_mesh_failed_face_tag(lin, i));
+  return hoc_run_event(run, HOC_EVENT_WARNING,
+                       "%d face(s) could not be meshed (the rest is processed): faces%s%s", nfail,
+                       faces, nfail > 30 ? " ..." : "");
+}
+
+/* hoc_mesh_model ---------------------------------------------------------- */
+
+/* The meshes of one run of hoc_mesh_model. */
+typedef struct model_meshes {
+  hoc_mesh *lin, *ho, *written, *raised;
+  /* the remeshing attempt with the fewest tangled elements so far (the
+   * earlier on a tie), while another is tried */
+  hoc_mesh *kept_lin, *kept_ho, *kept_raised;
+} model_meshes;
+
+static hoc_status check_model_options(const hoc_model *model, const hoc_mesh_options *o) {
+  HOC_CHECK(o->order >= 1 && o->order <= HOC_MAX_ORDER, HOC_ERR_ARGUMENT,
+            "order %d out of range 1..%d", o->order, HOC_MAX_ORDER);
+  HOC_CHECK(o->nodeset == HOC_NODES_EQUISPACED || o->nodeset == HOC_NODES_FEKETE ||
+                o->nodeset == HOC_NODES_WARP_BLEND,
+            HOC_ERR_ARGUMENT, "unknown node set %d", (int)o->nodeset);
+  HOC_CHECK(isfinite(o->size) && o->size >= 0 && isfinite(o->size_min) && o->size_min >= 0 &&
+                isfinite(o->curvature) && o->curvature >= 0,
+            HOC_ERR_ARGUMENT, "sizes and curvature must be finite and >= 0 (0: choose)");
+  HOC_CHECK(!(o->size_min > 0 && o->size > 0 && o->size_min > o->size), HOC_ERR_ARGUMENT,
+            "minimum size %g exceeds size %g", o->size_min, o->size);
+  HOC_CHECK(!o->linear || o->linear->model == model, HOC_ERR_MISMATCH,
+            "the given linear mesh is on another model");
+  return HOC_OK;
+}
+
+/* The linear mesh of an attempt: the given one's corners, or the linear
+ * mesher's with face bounds lo->face_size; *unlowered_min and
+ * prev_elements as in mesh_model_run. */
+static hoc_status linear_mesh(const hoc_run *run, hoc_model *model, hoc_linear_options *lo,
+                              double unlowered_min, size_t prev_elements, hoc_mesh **lin) {
+  const hoc_mesh_options *o = &run->o;
+  if (o->linear) {
+    /* a given linear mesh (e.g. gmsh's, to compare elevation on one mesh) */
+    if (hoc_mesh_order(o->linear) != 1)
+      return hoc_mesh_elevate(o->linear, 1, HOC_NODES_EQUISPACED, lin);
+    return hoc_mesh_copy(o->linear, lin);
+  }
+  HOC_TRY(hoc_run_event(run, HOC_EVENT_PROGRESS, "meshing %d faces", hoc_model_num_faces(model)));
+  HOC_TRY(hoc_mesh_generate_linear(model, lo, lin));
+  /* the lowered minimum lets the curvature sizing go finer on every
+   * face, not only on those meshed again (the aircraft at order 7:
+   * 192 990 elements from 7 818); halving the edges of every face
+   * would at most quadruple the mesh, so beyond that it is undone */
+  if (lo->size_min < unlowered_min && hoc_mesh_num_elements(*lin) > 4 * prev_elements) {
+    hoc_status status = hoc_run_event(
+        run, HOC_EVENT_NOTE,
+        "with the minimum size %g the faces made %zu elements, more than four times the %zu "
+        "before: meshing them again with the minimum size %g",
+        lo->size_min, hoc_mesh_num_elements(*lin), prev_elements, unlowered_min);
+    hoc_mesh_destroy(lin);
+    HOC_TRY(status);
+    lo->size_min = unlowered_min;
+    HOC_TRY(hoc_mesh_generate_linear(model, lo, lin));
+  }
+  return HOC_OK;
+}
+
+/* The attempts of hoc_mesh_model: *final becomes the result (one of m's
+ * meshes), *r its stages. */
+static hoc_status mesh_model_run(const hoc_run *run, hoc_model *model, model_meshes *m,
+                                 hoc_stages *r, hoc_mesh **final) {
+  const hoc_mesh_options *o = &run->o;
+  hoc_mesh **attempt[3] = {&m->lin, &m->ho, &m->raised};
+  hoc_mesh **kept[3] = {&m->kept_lin, &m->kept_ho, &m->kept_raised};
+  hoc_stages kept_r = {0};
+  double *face_size = NULL;
+  hoc_status status = HOC_OK;
+  hoc_linear_options lo;
+  hoc_linear_options_default(&lo);
+  lo.size_max = o->size;
+  lo.size_min = o->size_min;
+  lo.curvature = o->curvature;
+  lo.order = o->order;
+  /* the minimum size before a remeshing lowered it, and the elements of
+   * the linear mesh before that remeshing */
+  double unlowered_min = lo.size_min;
+  size_t prev_elements = 0;
+  for (;;) {
+    lo.face_size = face_size;
+    double t0 = hoc_pipeline_now();
+    HOC_TRY_GOTO(linear_mesh(run, model, &lo, unlowered_min, prev_elements, &m->lin), done);
+    double t_lin = hoc_pipeline_now() - t0;
+    HOC_TRY_GOTO(warn_failed_faces(run, m->lin), done);
+    HOC_TRY_GOTO(hoc_run_stage(run, r, "linear", m->lin, t_lin, NULL, NULL), done);
+    *final = m->lin;
+    if (o->order > 1) {
+      HOC_TRY_GOTO(hoc_run_event(run, HOC_EVENT_PROGRESS, "raising %zu elements to order %d",
+                                 hoc_mesh_num_elements(m->lin), o->order),
+                   done);
+      t0 = hoc_pipeline_now();
+      HOC_TRY_GOTO(hoc_mesh_elevate(m->lin, o->order, o->nodeset, &m->ho), done);
+      HOC_TRY_GOTO(
+          hoc_run_stage(run, r, "high-order", m->ho, hoc_pipeline_now() - t0, NULL, NULL), done);
+      *final = m->ho;
+    }
+    if (o->optimize && o->order > 1) {
+      /* the raised mesh before optimisation, for pictures */
+      if (o->keep_stages)
+        HOC_TRY_GOTO(hoc_mesh_elevate(m->lin, o->order, o->nodeset, &m->raised), done);
+      HOC_TRY_GOTO(hoc_repair_optimize(run, r, "optimized", m->ho, NULL), done);
+    }
+    /* elements left tangled: their faces meshed again finer, from the
+     * start; in a given linear mesh, or once the remeshing is spent, the
+     * elements split as hoc_mesh_repair splits them */
+    if (!o->optimize || o->order < 2 || !hoc_stages_last(r)->stage.stats.tangled ||
+        o->refinements < 1)
+      break;
+    if (o->linear || r->remeshings >= o->refinements) {
+      size_t now_tangled = hoc_stages_last(r)->stage.stats.tangled;
+      if (m->kept_ho && hoc_stages_last(&kept_r)->stage.stats.tangled < now_tangled) {
+        int made = r->refinements, remade = r->remeshings;
+        HOC_TRY_GOTO(hoc_run_event(run, HOC_EVENT_NOTE,
+                                   "the last mesh has more tangled elements (%zu) than the one "
+                                   "after %d remeshing(s) (%zu): going on from that one",
+                                   now_tangled, kept_r.remeshings,
+                                   hoc_stages_last(&kept_r)->stage.stats.tangled),
+                     done);
+        move_meshes(attempt, kept);
+        *r = kept_r;
+        r->refinements = made;
+        r->remeshings = remade;
+      }
+      status = hoc_repair_refine_tangled(run, r, 2, &m->ho, NULL, 0);
+      *final = m->ho;
+      break;
+    }
+    /* first the local repair, on a copy: splitting the tangled elements
+     * (as below, once remeshing is spent) keeps the rest of the mesh; it
+     * is kept if it leaves none tangled (the bottle at order 2: two
+     * elements at its thread's end, which two remeshings only make worse) */
+    int split_done = 0;
+    status = hoc_repair_split_first(run, r, &m->ho, &split_done);
+    *final = m->ho;
+    if (status != HOC_OK || split_done) break;
+    hoc_stages attempt_r = *r;
+    HOC_TRY_GOTO(hoc_repair_refine_faces(run, r, model, m->lin, m->ho, &face_size), done);
+    /* and unless size_min was given, let the curvature sizing go ten
+     * times finer (the bottle's thread curls through 130 degrees within
+     * 0.03 at its end, where the default minimum of 0.4 kept it coarse) */
+    prev_elements = hoc_mesh_num_elements(m->lin);
+    if (!(o->size_min > 0)) {
+      double size_max, size_min;
+      hoc_linear_sizes(model, &lo, &size_max, &size_min);
+      unlowered_min = size_min;
+      lo.size_min = size_min / 10;
+    }
+    if (!m->kept_ho || hoc_stages_last(&attempt_r)->stage.stats.tangled <
+                           hoc_stages_last(&kept_r)->stage.stats.tangled) {
+      move_meshes(kept, attempt);
+      kept_r = attempt_r;
+    } else {
+      hoc_mesh_destroy(&m->raised);
+      hoc_mesh_destroy(&m->ho);
+      hoc_mesh_destroy(&m->lin);
+    }
+  }
+  if (status == HOC_OK && *final == m->ho && o->optimize && o->order > 1) {
+    status = hoc_repair_smooth_low(run, r, &m->ho);
+    *final = m->ho;
+  }
+  /* files hold equispaced nodes: measure what is written */
+  if (status == HOC_OK && o->equispaced && o->nodeset != HOC_NODES_EQUISPACED && o->order >= 3) {
+    double t0 = hoc_pipeline_now();
+    HOC_TRY_GOTO(hoc_mesh_convert(*final, HOC_NODES_EQUISPACED, &m->written), done);
+    HOC_TRY_GOTO(
+        hoc_run_stage(run, r, "written", m->written, hoc_pipeline_now() - t0, NULL, NULL), done);
+    *final = m->written;
+  }
+done:
+  free(face_size);
+  return status;
+}
+
+hoc_status hoc_mesh_model(hoc_model *model, const hoc_mesh_options *options, hoc_mesh **mesh,
+                          hoc_report **report) {
+  if (mesh) *mesh = NULL;
+  if (report) *report = NULL;
+  HOC_CHECK(model, HOC_ERR_ARGUMENT, "no model given");
+  hoc_run run;
+  HOC_TRY(run_start(&run, options));
+  HOC_TRY(check_model_options(model, &run.o));
+  if (run.o.refinements < 0) run.o.refinements = run.o.linear ? 3 : 2;
+  model_meshes m = {0};
+  hoc_stages r = {0};
+  hoc_mesh *final = NULL;
+  hoc_report *rep = NULL;
+  hoc_status status = mesh_model_run(&run, model, &m, &r, &final);
+  if (status == HOC_OK) status = hoc_report_create("mesh", run.o.measure, &rep);
+  if (status == HOC_OK) {
+    int find = HOC_FIND_TANGLED | HOC_FIND_FROM_CAD;
+    if (run.o.optimize && run.o.order > 1) find |= HOC_FIND_CUSPS;
+    rep->failed_faces = hoc_mesh_num_failed_faces(m.lin);
+    status = hoc_report_finish(rep, &r, final, find);
+  }
+  if (status == HOC_OK && run.o.keep_stages) {
+    /* the linear mesh is the result itself at order 1: the report has a copy */
+    if (m.lin == final) status = hoc_mesh_copy(m.lin, &rep->linear);
+    else {
+      rep->linear = m.lin;
+      m.lin = NULL;
+    }
+    rep->raised = m.raised;
+    m.raised = NULL;
+  }
+  if (status == HOC_OK && mesh) {
+    /* the result leaves m, which frees the rest */
+    hoc_mesh **slots[3] = {&m.lin, &m.ho, &m.written};
+    for (int i = 0; i < 3; ++i)
+      if (*slots[i] == final) *slots[i] = NULL;
+    *mesh = final;
+  }
+  if (status == HOC_OK && report) {
+    *report = rep;
+    rep = NULL;
+  }
+  hoc_report_destroy(&rep);
+  hoc_mesh_destroy(&m.raised);
+  hoc_mesh_destroy(&m.written);
+  hoc_mesh_destroy(&m.ho);
+  hoc_mesh_destroy(&m.lin);
+  hoc_mesh_destroy(&m.kept_raised);
+  hoc_mesh_destroy(&m.kept_ho);
+  hoc_mesh_destroy(&m.kept_lin);
+  return status;
+}
+
+/* hoc_mesh_repair --------------------------------------------------------- */
+
+hoc_status hoc_mesh_repair(const hoc_mesh *in, const hoc_mesh_options *options, hoc_mesh **mesh,
+                           hoc_report **report) {
+  if (mesh) *mesh = NULL;
+  if (report) *report = NULL;
+  HOC_CHECK(in, HOC_ERR_ARGUMENT, "no mesh given");
+  hoc_run run;
+  HOC_TRY(run_start(&run, options));
+  if (run.o.refinements < 0) run.o.refinements = 6;
+  hoc_mesh *cur = NULL, *start = NULL;
+  hoc_report *rep = NULL;
+  hoc_stages r = {0};
+  hoc_status status = HOC_OK;
+  double t0 = hoc_pipeline_now();
+  HOC_TRY_GOTO(hoc_mesh_copy(in, &cur), done);
+  HOC_TRY_GOTO(hoc_run_stage(&run, &r, "input", cur, hoc_pipeline_now() - t0, NULL, NULL), done);
+  HOC_TRY_GOTO(
+      hoc_repair_optimize_starts(&run, &r, &cur, run.o.refinements > 0 ? &start : NULL), done);
+  if (hoc_stages_last(&r)->stage.stats.tangled && run.o.refinements > 0)
+    HOC_TRY_GOTO(hoc_repair_refine_tangled(&run, &r, 1, &cur, start, 0), done);
+  hoc_mesh_destroy(&start);
+  HOC_TRY_GOTO(hoc_report_create("optimize", run.o.measure, &rep), done);
+  HOC_TRY_GOTO(hoc_report_finish(rep, &r, cur, HOC_FIND_TANGLED), done);
+  if (mesh) {
+    *mesh = cur;
+    cur = NULL;
+  }
+  if (report) {
+    *report = rep;
+    rep = NULL;
+  }
+done:
+  hoc_report_destroy(&rep);
+  hoc_mesh_destroy(&start);
+  hoc_mesh_destroy(&cur);
+  return status;
+}
+
+/* hoc_mesh_quality_report ------------------------------------------------- */
+
+hoc_status hoc_mesh_quality_report(const hoc_mesh *mesh, hoc_measure measure,
+                                   hoc_report **report) {
+  HOC_CHECK(report, HOC_ERR_ARGUMENT, "report output is NULL");
+  *report = NULL;
+  HOC_CHECK(mesh, HOC_ERR_ARGUMENT, "no mesh given");
+  hoc_mesh_options o;
+  hoc_mesh_options_default(&o);
+  o.measure = measure;
+  hoc_run run;
+  HOC_TRY(run_start(&run, &o));
+  hoc_stages r = {0};
+  hoc_report *rep = NULL;
+  double t0 = hoc_pipeline_now();
+  hoc_status status = hoc_run_stage(&run, &r, "input", mesh, hoc_pipeline_now() - t0, NULL, NULL);
+  if (status == HOC_OK) status = hoc_report_create("quality", measure, &rep);
+  if (status == HOC_OK) status = hoc_report_finish(rep, &r, mesh, HOC_FIND_NOTHING);
+  if (status == HOC_OK) *report = rep;
+  else hoc_report_destroy(&rep);
+  return status;
+}

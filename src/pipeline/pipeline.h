@@ -1,0 +1,125 @@
+/* The pipelines of hoc_mesh_model and hoc_mesh_repair: their record of
+ * stages, the run they share, and the repairs (repair.c) the drivers
+ * (pipeline.c) call. The report and its JSON are in report.c.
+ * SPDX-License-Identifier: GPL-2.0-or-later */
+#ifndef HOC_PIPELINE_H
+#define HOC_PIPELINE_H
+
+#include "core/error.h"
+
+/* The most stages one attempt has: linear, high-order, split, optimized,
+ * smoothed, written (hoc_mesh_repair: input, re-placed or split, optimized). */
+enum { HOC_PIPELINE_MAX_STAGES = 6 };
+
+/* A stage with the optimiser's whole result (when stage.optimized). */
+typedef struct hoc_stage_record {
+  hoc_stage stage;
+  hoc_optimize_result result;
+} hoc_stage_record;
+
+/* The stages of an attempt and the refinements made. A value: an attempt
+ * (a split on a copy, a remeshing) works on a copy, kept or dropped whole. */
+typedef struct hoc_stages {
+  hoc_stage_record s[HOC_PIPELINE_MAX_STAGES];
+  int n;
+  int refinements; /* times tangled elements were meshed again finer (their faces, or split) */
+  int remeshings;  /* of those, remeshings of faces */
+} hoc_stages;
+
+/* Most findings a report holds: the tangled elements, the cusps. */
+enum { HOC_REPORT_MAX_FINDINGS = 4 };
+
+/* The public hoc_report. */
+struct hoc_report {
+  const char *command; /* "mesh", "optimize" or "quality" */
+  hoc_measure measure;
+  hoc_stages r;        /* the result's stages */
+  size_t elements, nodes;
+  double *quality;     /* [elements] q of the result */
+  int failed_faces;    /* faces the linear mesher could not mesh */
+  size_t n_findings;
+  hoc_event_kind finding_kind[HOC_REPORT_MAX_FINDINGS];
+  char *finding[HOC_REPORT_MAX_FINDINGS];
+  hoc_mesh *linear, *raised; /* keep_stages: owned */
+};
+
+/* A running pipeline: its options, with the defaults resolved. */
+typedef struct hoc_run {
+  hoc_mesh_options o;
+} hoc_run;
+
+/* The last stage of r (r->n >= 1). */
+static inline hoc_stage_record *hoc_stages_last(hoc_stages *r) { return &r->s[r->n - 1]; }
+
+/* Seconds on a monotonic clock. */
+double hoc_pipeline_now(void);
+
+/* Tell the caller (run->o.event) of an event with a printf-style message;
+ * HOC_ERR_INTERRUPTED if the caller cancels. */
+hoc_status hoc_run_event(const hoc_run *run, hoc_event_kind kind, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 3, 4)))
+#endif
+    ;
+
+/* Measure `mesh` as a new stage `name` (a static string) of r, made in
+ * `seconds`, and tell the caller. q: NULL, or [elements] q of each
+ * element; result: NULL, or the optimiser's result the stage is. */
+hoc_status hoc_run_stage(const hoc_run *run, hoc_stages *r, const char *name,
+                         const hoc_mesh *mesh, double seconds, double *q,
+                         const hoc_optimize_result *result);
+
+/* Repairs (repair.c) ------------------------------------------------------ */
+
+/* The optimiser on mesh, in place, as a new stage `name` of r. free:
+ * NULL, or [elements] flags of the elements whose nodes (and those of two
+ * rings around them) alone may move. */
+hoc_status hoc_repair_optimize(const hoc_run *run, hoc_stages *r, const char *name,
+                               hoc_mesh *mesh, const unsigned char *free);
+
+/* The optimiser from the input's high-order nodes or from nodes re-placed
+ * from its corners (hoc_mesh_repair); *mesh becomes the result, *start (if
+ * start is not NULL) the mesh it was optimised from. */
+hoc_status hoc_repair_optimize_starts(const hoc_run *run, hoc_stages *r, hoc_mesh **mesh,
+                                      hoc_mesh **start);
+
+/* The two chains of splits from the optimised *mesh (see repair.c); *mesh
+ * and *r become the result with the fewest tangled elements. trial: the
+ * caller decides what it keeps (no closing note). */
+hoc_status hoc_repair_refine_tangled(const hoc_run *run, hoc_stages *r, int n_keep,
+                                     hoc_mesh **mesh, const hoc_mesh *start, int trial);
+
+/* hoc_repair_refine_tangled on a copy of *ho, kept (*done = 1) only if it
+ * leaves no element tangled. */
+hoc_status hoc_repair_split_first(const hoc_run *run, hoc_stages *r, hoc_mesh **ho, int *done);
+
+/* The faces of the tangled elements of ho (made from lin) get an edge
+ * length bound of half their longest edge in *face_size (allocated on first
+ * use); r starts again. */
+hoc_status hoc_repair_refine_faces(const hoc_run *run, hoc_stages *r, const hoc_model *model,
+                                   const hoc_mesh *lin, const hoc_mesh *ho, double **face_size);
+
+/* Elements of an untangled optimised *mesh below 0.9 x the linear mesh's
+ * min q optimised once more with two rings around them ("smoothed"), kept
+ * if that raises the min q. */
+hoc_status hoc_repair_smooth_low(const hoc_run *run, hoc_stages *r, hoc_mesh **mesh);
+
+/* Reports (report.c) ------------------------------------------------------ */
+
+/* An empty report of `command` ("mesh", "optimize", "quality"). */
+hoc_status hoc_report_create(const char *command, hoc_measure measure, hoc_report **report);
+
+/* What hoc_report_finish looks for. */
+typedef enum hoc_findings {
+  HOC_FIND_NOTHING = 0,  /* hocad quality: the stages only */
+  HOC_FIND_TANGLED = 1,  /* tangled elements, and why */
+  HOC_FIND_FROM_CAD = 2, /* with TANGLED: a finer linear mesh is possible (the advice says so) */
+  HOC_FIND_CUSPS = 4     /* elements at a CAD cusp below 0.9 x the linear mesh's min q */
+} hoc_findings;
+
+/* Fill the report with the stages r of the result `final`: its size, its q
+ * and the findings asked for (hoc_findings flags). */
+hoc_status hoc_report_finish(hoc_report *report, const hoc_stages *r, const hoc_mesh *final,
+                             int findings);
+
+#endif

@@ -1,0 +1,426 @@
+/* What the pipelines do where the optimiser leaves elements tangled or
+ * poor: split them (two chains of splits), mesh their faces again finer,
+ * optimise the poor ones once more; and the two starts of hoc_mesh_repair.
+ * SPDX-License-Identifier: GPL-2.0-or-later */
+#include "pipeline/pipeline.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* From this order on, a split of an optimised mesh is optimised locally:
+ * only the nodes of the split's children and of LOCAL_RINGS rings of
+ * elements around them move (the rest of the mesh is where the first
+ * optimisation left it). Below it the whole mesh is optimised again, which
+ * costs little there (orders 2, 3, 5 and gmsh's order-3 meshes were
+ * measured so); at order 10 that took as long as the first optimisation,
+ * each split. */
+#define LOCAL_MIN_ORDER 6
+#define LOCAL_RINGS 2
+
+/* The optimiser's sweeps as events. */
+static int iteration_event(void *user, const hoc_optimize_iteration *it) {
+  const hoc_run *run = user;
+  if (!run->o.event) return 0;
+  char msg[256];
+  snprintf(msg, sizeof msg,
+           "iteration %3d: objective %.6g, min q %.4f, %zu tangled, %zu nodes moved (%.1f s)%s",
+           it->iteration, it->objective, it->min_q, it->tangled, it->moved, it->seconds,
+           it->attempt == 2 ? ", second attempt" : "");
+  hoc_event ev = {.kind = HOC_EVENT_ITERATION, .message = msg, .iteration = it};
+  return run->o.event(run->o.event_user, &ev);
+}
+
+hoc_status hoc_repair_optimize(const hoc_run *run, hoc_stages *r, const char *name,
+                               hoc_mesh *mesh, const unsigned char *free) {
+  const hoc_mesh_options *o = &run->o;
+  if (o->check_gradient) {
+    double err;
+    HOC_TRY(hoc_mesh_check_gradient(mesh, o->measure, o->fix_curves, 200, &err));
+    char msg[160];
+    snprintf(msg, sizeof msg,
+             "gradient check: largest relative difference to central differences %.2e (%s)", err,
+             err < 1e-4 ? "ok" : "MISMATCH");
+    hoc_event ev = {.kind = HOC_EVENT_CHECK, .message = msg, .value = err};
+    if (o->event && o->event(o->event_user, &ev))
+      return HOC_ERROR(HOC_ERR_INTERRUPTED, "interrupted by the event callback");
+  }
+  hoc_optimize_options oo;
+  hoc_optimize_options_default(&oo);
+  oo.measure = o->measure;
+  oo.fix_curves = o->fix_curves;
+  if (o->max_iterations) oo.max_iterations = o->max_iterations;
+  oo.progress = iteration_event;
+  oo.progress_user = (void *)run;
+  oo.free_elements = free;
+  oo.free_rings = LOCAL_RINGS;
+  HOC_TRY(hoc_run_event(run, HOC_EVENT_PROGRESS, "optimizing %zu elements",
+                        hoc_mesh_num_elements(mesh)));
+  hoc_optimize_result res;
+  double t0 = hoc_pipeline_now();
+  HOC_TRY(hoc_mesh_optimize(mesh, &oo, &res));
+  if (res.polished)
+    HOC_TRY(hoc_run_event(run, HOC_EVENT_NOTE,
+                          "the final polish untangled %zu element(s) the sweeps left",
+                          res.polished));
+  return hoc_run_stage(run, r, name, mesh, hoc_pipeline_now() - t0, NULL, &res);
+}
+
+/* The CAD tags of the faces holding flagged elements, each once, in element
+ * order (at most 20, then " ..."), each after a space. */
+static void faces_text(const hoc_mesh *mesh, const unsigned char *flag, char *buf, size_t size) {
+  size_t ne = hoc_mesh_num_elements(mesh), len = 0;
+  int shown[20], n_shown = 0, more = 0;
+  buf[0] = '\0';
+  for (size_t e = 0; e < ne; ++e) {
+    if (!flag[e]) continue;
+    int tag = hoc_mesh_element_face_tag(mesh, e), seen = 0;
+    for (int k = 0; k < n_shown && !seen; ++k)
+      seen = shown[k] == tag;
+    if (seen) continue;
+    if (n_shown == 20) {
+      more = 1;
+      break;
+    }
+    shown[n_shown++] = tag;
+    if (len < size) len += (size_t)snprintf(buf + len, size - len, " %d", tag);
+  }
+  if (more && len < size) snprintf(buf + len, size - len, " ...");
+}
+
+/* Where the optimiser leaves tangled elements of *mesh: split them in four
+ * (their neighbours as `kind` says, to keep the mesh conforming; children
+ * placed straight between their corners) and optimise again: *fine, with
+ * the stages r (its first n_keep stages kept, then "split" and
+ * "optimized"). The mesh split is `base` (the same elements as mesh, e.g.
+ * the start mesh was optimised from), or mesh itself if base is NULL; if
+ * fine_start is not NULL, it receives a copy of the split mesh before its
+ * optimisation. */
+static hoc_status split_tangled(const hoc_run *run, hoc_stages *r, int n_keep,
+                                hoc_split_kind kind, const hoc_mesh *mesh, const hoc_mesh *base,
+                                hoc_mesh **fine, hoc_mesh **fine_start) {
+  size_t ne = hoc_mesh_num_elements(mesh), total = 0;
+  unsigned char *tangled = NULL, *pieces = NULL, *children = NULL;
+  hoc_status status = HOC_OK;
+  HOC_ALLOC_GOTO(tangled, ne, done);
+  double t0 = hoc_pipeline_now();
+  /* from LOCAL_MIN_ORDER on, a split of the optimised mesh is optimised
+   * locally: its children and LOCAL_RINGS rings around them */
+  int local = !base && hoc_mesh_order(mesh) >= LOCAL_MIN_ORDER;
+  if (local) HOC_ALLOC_GOTO(pieces, ne, done);
+  HOC_TRY_GOTO(hoc_mesh_measure(mesh, run->o.measure, NULL, tangled, NULL), done);
+  HOC_TRY_GOTO(hoc_mesh_split(base ? base : mesh, tangled, kind, fine, pieces), done);
+  if (local) {
+    size_t nf = hoc_mesh_num_elements(*fine), j = 0;
+    HOC_ALLOC_GOTO(children, nf, done);
+    for (size_t e = 0; e < ne; j += pieces[e++])
+      for (size_t c = j; c < j + pieces[e] && c < nf; ++c) children[c] = pieces[e] > 1;
+  }
+  for (size_t e = 0; e < ne; ++e)
+    total += tangled[e];
+  r->refinements++;
+  char faces[320];
+  faces_text(mesh, tangled, faces, sizeof faces);
+  HOC_TRY_GOTO(hoc_run_event(run, HOC_EVENT_REPAIR,
+                             "%zu element(s) still tangled; splitting them and their neighbours "
+                             "%s (%zu -> %zu elements) and optimising %s again (refinement %d): "
+                             "faces%s",
+                             total,
+                             kind == HOC_SPLIT_RED_GREEN ? "red-green" : "at their longest edges",
+                             ne, hoc_mesh_num_elements(*fine),
+                             local ? "the new elements and two rings around them" : "the mesh",
+                             r->refinements, faces),
+               done);
+  r->n = n_keep; /* the stages before the optimisation stay */
+  HOC_TRY_GOTO(hoc_run_stage(run, r, "split", *fine, hoc_pipeline_now() - t0, NULL, NULL), done);
+  if (fine_start) HOC_TRY_GOTO(hoc_mesh_copy(*fine, fine_start), done);
+  HOC_TRY_GOTO(hoc_repair_optimize(run, r, "optimized", *fine, children), done);
+done:
+  free(tangled);
+  free(pieces);
+  free(children);
+  if (status != HOC_OK) {
+    hoc_mesh_destroy(fine);
+    if (fine_start) hoc_mesh_destroy(fine_start);
+  }
+  return status;
+}
+
+/* Destroy *m unless it is one of keep[n]. */
+static void drop_mesh(hoc_mesh **m, hoc_mesh *const *keep, int n) {
+  for (int i = 0; i < n; ++i)
+    if (*m == keep[i]) {
+      *m = NULL;
+      return;
+    }
+  hoc_mesh_destroy(m);
+}
+
+/* Two chains of splits from the optimised mesh *mesh, taken in turn: one
+ * red-green (keeps shapes, but its two-way cuts make slivers thinner), one
+ * at longest edges (cuts slivers across), each at most `refinements`
+ * splits and each going on from its own latest result. Stops once a result
+ * has no tangled element. Given `start`, the mesh *mesh was optimised from
+ * (the same elements), the longest-edge chain splits that and then each of
+ * its own split meshes as they were before their optimisation (the
+ * elements that stay tangled flagged by the optimised ones): corners an
+ * optimisation moved into a sliver that folds in (u, v) give children
+ * folded the same way, split straight between them (gmsh's aircraft,
+ * face 69: from the optimised meshes 4, 4, 8 tangled in three splits, from
+ * the starts 6, 8, 4, 0 in four; gmsh 4.8's 6, 6, 5, 1, 1, 0 in six, hence
+ * hoc_mesh_repair's default of 6). *mesh and *r become the result with the
+ * fewest tangled elements (the earlier on a tie); r->refinements goes on
+ * counting with every split made; the split results' stages keep r's
+ * first n_keep stages. A trial gives no closing note (its caller decides
+ * what it keeps). */
+hoc_status hoc_repair_refine_tangled(const hoc_run *run, hoc_stages *r, int n_keep,
+                                     hoc_mesh **mesh, const hoc_mesh *start, int trial) {
+  static const hoc_split_kind kinds[2] = {HOC_SPLIT_RED_GREEN, HOC_SPLIT_LONGEST_EDGE};
+  hoc_mesh *base = *mesh, *best = base, *cur[2] = {base, base};
+  hoc_mesh *own_start = NULL; /* the longest-edge chain's latest split mesh, unoptimised */
+  hoc_stages best_r = *r, chain_r[2] = {*r, *r};
+  hoc_status status = HOC_OK;
+  int made = r->refinements, levels = run->o.refinements;
+  for (int level = 0; level < levels && status == HOC_OK; ++level)
+    for (int k = 0; k < 2 && status == HOC_OK && hoc_stages_last(&best_r)->stage.stats.tangled;
+         ++k) {
+      hoc_mesh *fine = NULL, *fine_start = NULL;
+      int from_start = k == 1 && start;
+      chain_r[k].refinements = made;
+      /* the last level's split mesh is never split again: no copy of it */
+      int more = level + 1 < levels;
+      status = split_tangled(run, &chain_r[k], n_keep, kinds[k], cur[k], from_start ? start : NULL,
+                             &fine, from_start && more ? &fine_start : NULL);
+      made = chain_r[k].refinements;
+      if (status != HOC_OK) break;
+      if (from_start) {
+        hoc_mesh_destroy(&own_start);
+        start = own_start = fine_start;
+      }
+      hoc_mesh *keep[4] = {base, best, cur[1 - k], fine};
+      drop_mesh(&cur[k], keep, 4);
+      cur[k] = fine;
+      if (hoc_stages_last(&chain_r[k])->stage.stats.tangled <
+          hoc_stages_last(&best_r)->stage.stats.tangled) {
+        hoc_mesh *keep2[3] = {base, cur[0], cur[1]};
+        drop_mesh(&best, keep2, 3);
+        best = fine;
+        best_r = chain_r[k];
+      }
+    }
+  hoc_mesh_destroy(&own_start);
+  int improved = best != base;
+  for (int k = 0; k < 2; ++k) {
+    hoc_mesh *keep[3] = {base, best, k ? cur[0] : NULL};
+    drop_mesh(&cur[k], keep, 3);
+  }
+  if (improved) hoc_mesh_destroy(&base);
+  *mesh = best;
+  *r = best_r;
+  r->refinements = made;
+  if (status == HOC_OK && !trial && improved)
+    status = hoc_run_event(run, HOC_EVENT_NOTE,
+                           "kept the mesh of refinement %d of %d, which has the fewest tangled "
+                           "elements",
+                           best_r.refinements, made);
+  else if (status == HOC_OK && !trial)
+    status = hoc_run_event(run, HOC_EVENT_NOTE,
+                           "splitting left no fewer tangled elements: kept the mesh before it");
+  return status;
+}
+
+hoc_status hoc_repair_split_first(const hoc_run *run, hoc_stages *r, hoc_mesh **ho, int *done) {
+  *done = 0;
+  hoc_mesh *copy = NULL;
+  HOC_TRY(hoc_mesh_copy(*ho, &copy));
+  hoc_stages trial = *r;
+  hoc_status status = hoc_run_event(
+      run, HOC_EVENT_REPAIR, "splitting the tangled elements first (kept if that leaves none "
+                             "tangled)");
+  if (status == HOC_OK) status = hoc_repair_refine_tangled(run, &trial, 2, &copy, NULL, 1);
+  size_t left = status != HOC_OK ? 0 : hoc_stages_last(&trial)->stage.stats.tangled;
+  if (status == HOC_OK && !left) {
+    hoc_mesh_destroy(ho);
+    *ho = copy;
+    *r = trial;
+    *done = 1;
+    return hoc_run_event(run, HOC_EVENT_NOTE,
+                         "kept the mesh of refinement %d, which has no tangled element",
+                         trial.refinements);
+  }
+  hoc_mesh_destroy(&copy);
+  r->refinements = trial.refinements; /* made, though not kept */
+  if (status == HOC_OK)
+    status = hoc_run_event(run, HOC_EVENT_NOTE,
+                           "splitting left %zu tangled at best: meshing the faces again instead",
+                           left);
+  return status;
+}
+
+hoc_status hoc_repair_refine_faces(const hoc_run *run, hoc_stages *r, const hoc_model *model,
+                                   const hoc_mesh *lin, const hoc_mesh *ho, double **face_size) {
+  size_t ne = hoc_mesh_num_elements(ho);
+  unsigned char *tangled = NULL;
+  hoc_status status = HOC_OK;
+  HOC_ALLOC_GOTO(tangled, ne, done);
+  if (!*face_size) HOC_ALLOC_GOTO(*face_size, (size_t)hoc_model_num_faces(model) + 1, done);
+  HOC_TRY_GOTO(hoc_mesh_measure(ho, run->o.measure, NULL, tangled, NULL), done);
+  HOC_TRY_GOTO(hoc_mesh_refine_bounds(lin, tangled, 0.5, *face_size), done);
+  r->refinements++;
+  r->remeshings++;
+  size_t total = 0;
+  for (size_t e = 0; e < ne; ++e)
+    total += tangled[e];
+  char faces[320];
+  faces_text(ho, tangled, faces, sizeof faces);
+  HOC_TRY_GOTO(hoc_run_event(run, HOC_EVENT_REPAIR,
+                             "%zu element(s) still tangled; meshing their faces again with edges "
+                             "half as long (remeshing %d of at most %d, refinement %d): faces%s",
+                             total, r->remeshings, run->o.refinements, r->refinements, faces),
+               done);
+  r->n = 0;
+done:
+  free(tangled);
+  return status;
+}
+
+/* Elements an untangled optimised mesh *mesh has below 0.9 x the linear
+ * mesh's min q (the bound hocad aims at): their nodes and those of
+ * LOCAL_RINGS rings around them optimised once more, alone (a stage
+ * "smoothed"). Kept only if that raises the min q: the objective is a sum
+ * over the elements, not their minimum. (The aircraft at order 10: its
+ * splits next to a CAD curve 0.002 long, at the wing root, left 0.00197
+ * against a linear 0.00230; this gives 0.00219 in 7 s.) */
+hoc_status hoc_repair_smooth_low(const hoc_run *run, hoc_stages *r, hoc_mesh **mesh) {
+  const hoc_stage *last = &hoc_stages_last(r)->stage;
+  double bound = 0.9 * r->s[0].stage.stats.min;
+  if (!last->optimized || last->stats.tangled || !(last->stats.min < bound)) return HOC_OK;
+  size_t ne = hoc_mesh_num_elements(*mesh), n_low = 0;
+  double *q = NULL;
+  unsigned char *low = NULL;
+  hoc_mesh *copy = NULL;
+  hoc_status status = HOC_OK;
+  HOC_ALLOC_GOTO(low, ne, done);
+  HOC_ALLOC_GOTO(q, ne, done);
+  HOC_TRY_GOTO(hoc_mesh_measure(*mesh, run->o.measure, q, NULL, NULL), done);
+  HOC_TRY_GOTO(hoc_mesh_copy(*mesh, &copy), done);
+  for (size_t e = 0; e < ne; ++e) {
+    low[e] = q[e] < bound;
+    n_low += low[e];
+  }
+  hoc_stages trial = *r;
+  HOC_TRY_GOTO(hoc_run_event(run, HOC_EVENT_REPAIR,
+                             "%zu element(s) below 0.9 x the linear mesh's min q (%.4f); "
+                             "optimising them and two rings around them once more",
+                             n_low, r->s[0].stage.stats.min),
+               done);
+  HOC_TRY_GOTO(hoc_repair_optimize(run, &trial, "smoothed", copy, low), done);
+  const hoc_stage *sm = &hoc_stages_last(&trial)->stage;
+  if (!sm->stats.tangled && sm->stats.min > last->stats.min) {
+    hoc_mesh_destroy(mesh);
+    *mesh = copy;
+    copy = NULL;
+    *r = trial;
+  } else {
+    HOC_TRY_GOTO(hoc_run_event(run, HOC_EVENT_NOTE,
+                               "that did not raise the min q (%.4f): kept the mesh before",
+                               sm->stats.min),
+                 done);
+  }
+done:
+  hoc_mesh_destroy(&copy);
+  free(q);
+  free(low);
+  return status;
+}
+
+/* The input's high-order nodes placed afresh from its corners, as
+ * hoc_mesh_model places them (straight in each face's parameters, along the
+ * curves), in *alt with a "re-placed" stage, unless that tangles clearly
+ * more elements (over 10% more) than the input (then *alt stays NULL).
+ * Other meshers' placement (gmsh's SetOrder projects each node on the CAD)
+ * can leave folds the optimiser does not undo from there, and the other way
+ * round: hoc_mesh_repair tries both. */
+static hoc_status replace_nodes(const hoc_run *run, hoc_stages *r, const hoc_mesh *mesh,
+                                hoc_mesh **alt) {
+  double t0 = hoc_pipeline_now();
+  hoc_mesh *lin = NULL;
+  hoc_status s = hoc_mesh_elevate(mesh, 1, HOC_NODES_EQUISPACED, &lin);
+  if (s == HOC_OK) s = hoc_mesh_elevate(lin, hoc_mesh_order(mesh), hoc_mesh_nodeset(mesh), alt);
+  hoc_mesh_destroy(&lin);
+  if (s == HOC_OK)
+    s = hoc_run_stage(run, r, "re-placed", *alt, hoc_pipeline_now() - t0, NULL, NULL);
+  if (s != HOC_OK) {
+    hoc_mesh_destroy(alt);
+    return s;
+  }
+  size_t in = r->s[0].stage.stats.tangled;
+  if (hoc_stages_last(r)->stage.stats.tangled > in + in / 10) { /* clearly worse: not used */
+    r->n--;
+    hoc_mesh_destroy(alt);
+  }
+  return HOC_OK;
+}
+
+/* hoc_repair_optimize on mesh, a copy of it before kept in *start (if that
+ * is not NULL): the start the result came from. */
+static hoc_status optimize_keep_start(const hoc_run *run, hoc_stages *r, hoc_mesh *mesh,
+                                      hoc_mesh **start) {
+  if (start) HOC_TRY(hoc_mesh_copy(mesh, start));
+  hoc_status status = hoc_repair_optimize(run, r, "optimized", mesh, NULL);
+  if (status != HOC_OK && start) hoc_mesh_destroy(start);
+  return status;
+}
+
+/* Optimise *mesh, or where a re-placed start exists, that first and, if it
+ * stays tangled, the input's own nodes too: the result with fewer tangled
+ * elements (then the lower objective) is kept in *mesh, and, if start is
+ * not NULL, the mesh it was optimised from in *start (for the splits). */
+hoc_status hoc_repair_optimize_starts(const hoc_run *run, hoc_stages *r, hoc_mesh **mesh,
+                                      hoc_mesh **start) {
+  hoc_mesh *alt = NULL, *alt_start = NULL;
+  hoc_status status = HOC_OK;
+  if (!run->o.keep_nodes && r->s[0].stage.stats.tangled && hoc_mesh_order(*mesh) > 1)
+    HOC_TRY(replace_nodes(run, r, *mesh, &alt));
+  if (!alt) return optimize_keep_start(run, r, *mesh, start);
+  if ((status = optimize_keep_start(run, r, alt, start)) != HOC_OK ||
+      !hoc_stages_last(r)->stage.stats.tangled) {
+    hoc_mesh_destroy(mesh);
+    *mesh = alt;
+    return status;
+  }
+  if (start) { /* the re-placed start, until the input's own wins */
+    alt_start = *start;
+    *start = NULL;
+  }
+  hoc_stage_record from_alt = r->s[--r->n];
+  if ((status = optimize_keep_start(run, r, *mesh, start)) != HOC_OK) {
+    hoc_mesh_destroy(&alt);
+    hoc_mesh_destroy(&alt_start);
+    return status;
+  }
+  const hoc_stage *own = &hoc_stages_last(r)->stage;
+  int alt_wins = from_alt.stage.stats.tangled < own->stats.tangled ||
+                 (from_alt.stage.stats.tangled == own->stats.tangled &&
+                  from_alt.stage.objective < own->objective);
+  status = hoc_run_event(run, HOC_EVENT_NOTE,
+                         "optimised from the re-placed nodes (%zu tangled left) and from the "
+                         "input's own (%zu): kept the %s",
+                         from_alt.stage.stats.tangled, own->stats.tangled,
+                         alt_wins ? "re-placed start's result" : "input's");
+  if (alt_wins) {
+    r->s[r->n - 1] = from_alt;
+    hoc_mesh_destroy(mesh);
+    *mesh = alt;
+    if (start) {
+      hoc_mesh_destroy(start);
+      *start = alt_start;
+    }
+  } else {
+    hoc_mesh_destroy(&alt);
+    hoc_mesh_destroy(&alt_start);
+    r->s[r->n - 2] = r->s[r->n - 1]; /* the re-placed start was not used */
+    r->n--;
+  }
+  return status;
+}
