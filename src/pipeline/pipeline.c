@@ -3,8 +3,8 @@
  * tangled), hoc_mesh_repair (`hocad optimize`: a given high-order mesh
  * optimised and split) and hoc_mesh_quality_report (`hocad quality`).
  * SPDX-License-Identifier: GPL-2.0-or-later */
-#include "mesh/mesh.h"
 #include "pipeline/pipeline.h"
+#include "mesh/mesh.h"
 
 #include <math.h>
 #include <stdarg.h>
@@ -36,9 +36,8 @@ hoc_status hoc_run_event(const hoc_run *run, hoc_event_kind kind, const char *fm
   return cancel ? HOC_ERROR(HOC_ERR_INTERRUPTED, "interrupted by the event callback") : HOC_OK;
 }
 
-hoc_status hoc_run_stage(const hoc_run *run, hoc_stages *r, const char *name,
-                         const hoc_mesh *mesh, double seconds, double *q,
-                         const hoc_optimize_result *result) {
+hoc_status hoc_run_stage(const hoc_run *run, hoc_stages *r, const char *name, const hoc_mesh *mesh,
+                         double seconds, double *q, const hoc_optimize_result *result) {
   HOC_CHECK(r->n < HOC_PIPELINE_MAX_STAGES, HOC_ERR_INTERNAL, "more than %d stages",
             HOC_PIPELINE_MAX_STAGES);
   hoc_stage_record *s = &r->s[r->n];
@@ -77,8 +76,10 @@ void hoc_mesh_options_default(hoc_mesh_options *options) {
 /* Check the options both pipelines use; run gets a copy (defaults if
  * options is NULL). */
 static hoc_status run_start(hoc_run *run, const hoc_mesh_options *options) {
-  if (options) run->o = *options;
-  else hoc_mesh_options_default(&run->o);
+  if (options)
+    run->o = *options;
+  else
+    hoc_mesh_options_default(&run->o);
   const hoc_mesh_options *o = &run->o;
   HOC_CHECK(o->measure == HOC_MEASURE_SHAPE || o->measure == HOC_MEASURE_ODDY, HOC_ERR_ARGUMENT,
             "unknown distortion measure %d", (int)o->measure);
@@ -106,8 +107,8 @@ static hoc_status warn_failed_faces(const hoc_run *run, const hoc_mesh *lin) {
   size_t len = 0;
   faces[0] = '\0';
   for (int i = 0; i < nfail && i < 30 && len < sizeof faces; ++i)
-    len += (size_t)snprintf(faces + len, sizeof faces - len, " %d",
-                            hoc_mesh_failed_face_tag(lin, i));
+    len +=
+        (size_t)snprintf(faces + len, sizeof faces - len, " %d", hoc_mesh_failed_face_tag(lin, i));
   return hoc_run_event(run, HOC_EVENT_WARNING,
                        "%d face(s) could not be meshed (the rest is processed): faces%s%s", nfail,
                        faces, nfail > 30 ? " ..." : "");
@@ -205,8 +206,8 @@ static hoc_status mesh_model_run(const hoc_run *run, hoc_model *model, model_mes
                    done);
       t0 = hoc_pipeline_now();
       HOC_TRY_GOTO(hoc_mesh_elevate(m->lin, o->order, o->nodeset, &m->ho), done);
-      HOC_TRY_GOTO(
-          hoc_run_stage(run, r, "high-order", m->ho, hoc_pipeline_now() - t0, NULL, NULL), done);
+      HOC_TRY_GOTO(hoc_run_stage(run, r, "high-order", m->ho, hoc_pipeline_now() - t0, NULL, NULL),
+                   done);
       *final = m->ho;
     }
     if (o->optimize && o->order > 1) {
@@ -278,8 +279,8 @@ static hoc_status mesh_model_run(const hoc_run *run, hoc_model *model, model_mes
   if (status == HOC_OK && o->equispaced && o->nodeset != HOC_NODES_EQUISPACED && o->order >= 3) {
     double t0 = hoc_pipeline_now();
     HOC_TRY_GOTO(hoc_mesh_convert(*final, HOC_NODES_EQUISPACED, &m->written), done);
-    HOC_TRY_GOTO(
-        hoc_run_stage(run, r, "written", m->written, hoc_pipeline_now() - t0, NULL, NULL), done);
+    HOC_TRY_GOTO(hoc_run_stage(run, r, "written", m->written, hoc_pipeline_now() - t0, NULL, NULL),
+                 done);
     *final = m->written;
   }
 done:
@@ -310,7 +311,8 @@ hoc_status hoc_mesh_model(hoc_model *model, const hoc_mesh_options *options, hoc
   }
   if (status == HOC_OK && run.o.keep_stages) {
     /* the linear mesh is the result itself at order 1: the report has a copy */
-    if (m.lin == final) status = hoc_mesh_copy(m.lin, &rep->linear);
+    if (m.lin == final)
+      status = hoc_mesh_copy(m.lin, &rep->linear);
     else {
       rep->linear = m.lin;
       m.lin = NULL;
@@ -357,8 +359,8 @@ hoc_status hoc_mesh_repair(const hoc_mesh *in, const hoc_mesh_options *options, 
   double t0 = hoc_pipeline_now();
   HOC_TRY_GOTO(hoc_mesh_copy(in, &cur), done);
   HOC_TRY_GOTO(hoc_run_stage(&run, &r, "input", cur, hoc_pipeline_now() - t0, NULL, NULL), done);
-  HOC_TRY_GOTO(
-      hoc_repair_optimize_starts(&run, &r, &cur, run.o.refinements > 0 ? &start : NULL), done);
+  HOC_TRY_GOTO(hoc_repair_optimize_starts(&run, &r, &cur, run.o.refinements > 0 ? &start : NULL),
+               done);
   if (hoc_stages_last(&r)->stage.stats.tangled && run.o.refinements > 0)
     HOC_TRY_GOTO(hoc_repair_refine_tangled(&run, &r, 1, &cur, start, 0), done);
   hoc_mesh_destroy(&start);
@@ -381,8 +383,7 @@ done:
 
 /* hoc_mesh_quality_report ------------------------------------------------- */
 
-hoc_status hoc_mesh_quality_report(const hoc_mesh *mesh, hoc_measure measure,
-                                   hoc_report **report) {
+hoc_status hoc_mesh_quality_report(const hoc_mesh *mesh, hoc_measure measure, hoc_report **report) {
   HOC_CHECK(report, HOC_ERR_ARGUMENT, "report output is NULL");
   *report = NULL;
   HOC_CHECK(mesh, HOC_ERR_ARGUMENT, "no mesh given");
@@ -397,7 +398,9 @@ hoc_status hoc_mesh_quality_report(const hoc_mesh *mesh, hoc_measure measure,
   hoc_status status = hoc_run_stage(&run, &r, "input", mesh, hoc_pipeline_now() - t0, NULL, NULL);
   if (status == HOC_OK) status = hoc_report_create("quality", measure, &rep);
   if (status == HOC_OK) status = hoc_report_finish(rep, &r, mesh, HOC_FIND_NOTHING);
-  if (status == HOC_OK) *report = rep;
-  else hoc_report_destroy(&rep);
+  if (status == HOC_OK)
+    *report = rep;
+  else
+    hoc_report_destroy(&rep);
   return status;
 }

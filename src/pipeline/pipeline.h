@@ -33,10 +33,10 @@ enum { HOC_REPORT_MAX_FINDINGS = 4 };
 struct hoc_report {
   const char *command; /* "mesh", "optimize" or "quality" */
   hoc_measure measure;
-  hoc_stages r;        /* the result's stages */
+  hoc_stages r; /* the result's stages */
   size_t elements, nodes;
-  double *quality;     /* [elements] q of the result */
-  int failed_faces;    /* faces the linear mesher could not mesh */
+  double *quality;  /* [elements] q of the result */
+  int failed_faces; /* faces the linear mesher could not mesh */
   size_t n_findings;
   hoc_event_kind finding_kind[HOC_REPORT_MAX_FINDINGS];
   char *finding[HOC_REPORT_MAX_FINDINGS];
@@ -65,17 +65,16 @@ hoc_status hoc_run_event(const hoc_run *run, hoc_event_kind kind, const char *fm
 /* Measure `mesh` as a new stage `name` (a static string) of r, made in
  * `seconds`, and tell the caller. q: NULL, or [elements] q of each
  * element; result: NULL, or the optimiser's result the stage is. */
-hoc_status hoc_run_stage(const hoc_run *run, hoc_stages *r, const char *name,
-                         const hoc_mesh *mesh, double seconds, double *q,
-                         const hoc_optimize_result *result);
+hoc_status hoc_run_stage(const hoc_run *run, hoc_stages *r, const char *name, const hoc_mesh *mesh,
+                         double seconds, double *q, const hoc_optimize_result *result);
 
 /* Repairs (repair.c) ------------------------------------------------------ */
 
 /* The optimiser on mesh, in place, as a new stage `name` of r. free:
  * NULL, or [elements] flags of the elements whose nodes (and those of two
  * rings around them) alone may move. */
-hoc_status hoc_repair_optimize(const hoc_run *run, hoc_stages *r, const char *name,
-                               hoc_mesh *mesh, const unsigned char *free);
+hoc_status hoc_repair_optimize(const hoc_run *run, hoc_stages *r, const char *name, hoc_mesh *mesh,
+                               const unsigned char *free);
 
 /* The optimiser from the input's high-order nodes or from nodes re-placed
  * from its corners (hoc_mesh_repair); *mesh becomes the result, *start (if
@@ -86,8 +85,8 @@ hoc_status hoc_repair_optimize_starts(const hoc_run *run, hoc_stages *r, hoc_mes
 /* The two chains of splits from the optimised *mesh (see repair.c); *mesh
  * and *r become the result with the fewest tangled elements. trial: the
  * caller decides what it keeps (no closing note). */
-hoc_status hoc_repair_refine_tangled(const hoc_run *run, hoc_stages *r, int n_keep,
-                                     hoc_mesh **mesh, const hoc_mesh *start, int trial);
+hoc_status hoc_repair_refine_tangled(const hoc_run *run, hoc_stages *r, int n_keep, hoc_mesh **mesh,
+                                     const hoc_mesh *start, int trial);
 
 /* hoc_repair_refine_tangled on a copy of *ho, kept (*done = 1) only if it
  * leaves no element tangled. */

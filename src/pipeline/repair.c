@@ -31,8 +31,8 @@ static int iteration_event(void *user, const hoc_optimize_iteration *it) {
   return run->o.event(run->o.event_user, &ev);
 }
 
-hoc_status hoc_repair_optimize(const hoc_run *run, hoc_stages *r, const char *name,
-                               hoc_mesh *mesh, const unsigned char *free) {
+hoc_status hoc_repair_optimize(const hoc_run *run, hoc_stages *r, const char *name, hoc_mesh *mesh,
+                               const unsigned char *free) {
   const hoc_mesh_options *o = &run->o;
   if (o->check_gradient) {
     double err;
@@ -96,9 +96,9 @@ static void faces_text(const hoc_mesh *mesh, const unsigned char *flag, char *bu
  * the start mesh was optimised from), or mesh itself if base is NULL; if
  * fine_start is not NULL, it receives a copy of the split mesh before its
  * optimisation. */
-static hoc_status split_tangled(const hoc_run *run, hoc_stages *r, int n_keep,
-                                hoc_split_kind kind, const hoc_mesh *mesh, const hoc_mesh *base,
-                                hoc_mesh **fine, hoc_mesh **fine_start) {
+static hoc_status split_tangled(const hoc_run *run, hoc_stages *r, int n_keep, hoc_split_kind kind,
+                                const hoc_mesh *mesh, const hoc_mesh *base, hoc_mesh **fine,
+                                hoc_mesh **fine_start) {
   size_t ne = hoc_mesh_num_elements(mesh), total = 0;
   unsigned char *tangled = NULL, *pieces = NULL, *children = NULL;
   hoc_status status = HOC_OK;
@@ -114,7 +114,8 @@ static hoc_status split_tangled(const hoc_run *run, hoc_stages *r, int n_keep,
     size_t nf = hoc_mesh_num_elements(*fine), j = 0;
     HOC_ALLOC_GOTO(children, nf, done);
     for (size_t e = 0; e < ne; j += pieces[e++])
-      for (size_t c = j; c < j + pieces[e] && c < nf; ++c) children[c] = pieces[e] > 1;
+      for (size_t c = j; c < j + pieces[e] && c < nf; ++c)
+        children[c] = pieces[e] > 1;
   }
   for (size_t e = 0; e < ne; ++e)
     total += tangled[e];
@@ -173,8 +174,8 @@ static void drop_mesh(hoc_mesh **m, hoc_mesh *const *keep, int n) {
  * counting with every split made; the split results' stages keep r's
  * first n_keep stages. A trial gives no closing note (its caller decides
  * what it keeps). */
-hoc_status hoc_repair_refine_tangled(const hoc_run *run, hoc_stages *r, int n_keep,
-                                     hoc_mesh **mesh, const hoc_mesh *start, int trial) {
+hoc_status hoc_repair_refine_tangled(const hoc_run *run, hoc_stages *r, int n_keep, hoc_mesh **mesh,
+                                     const hoc_mesh *start, int trial) {
   static const hoc_split_kind kinds[2] = {HOC_SPLIT_RED_GREEN, HOC_SPLIT_LONGEST_EDGE};
   hoc_mesh *base = *mesh, *best = base, *cur[2] = {base, base};
   hoc_mesh *own_start = NULL; /* the longest-edge chain's latest split mesh, unoptimised */
@@ -234,9 +235,10 @@ hoc_status hoc_repair_split_first(const hoc_run *run, hoc_stages *r, hoc_mesh **
   hoc_mesh *copy = NULL;
   HOC_TRY(hoc_mesh_copy(*ho, &copy));
   hoc_stages trial = *r;
-  hoc_status status = hoc_run_event(
-      run, HOC_EVENT_REPAIR, "splitting the tangled elements first (kept if that leaves none "
-                             "tangled)");
+  hoc_status status =
+      hoc_run_event(run, HOC_EVENT_REPAIR,
+                    "splitting the tangled elements first (kept if that leaves none "
+                    "tangled)");
   if (status == HOC_OK) status = hoc_repair_refine_tangled(run, &trial, 2, &copy, NULL, 1);
   size_t left = status != HOC_OK ? 0 : hoc_stages_last(&trial)->stage.stats.tangled;
   if (status == HOC_OK && !left) {
@@ -251,9 +253,9 @@ hoc_status hoc_repair_split_first(const hoc_run *run, hoc_stages *r, hoc_mesh **
   hoc_mesh_destroy(&copy);
   r->refinements = trial.refinements; /* made, though not kept */
   if (status == HOC_OK)
-    status = hoc_run_event(run, HOC_EVENT_NOTE,
-                           "splitting left %zu tangled at best: meshing the faces again instead",
-                           left);
+    status =
+        hoc_run_event(run, HOC_EVENT_NOTE,
+                      "splitting left %zu tangled at best: meshing the faces again instead", left);
   return status;
 }
 

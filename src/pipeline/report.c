@@ -37,7 +37,8 @@ static void text_add(text *t, const char *fmt, ...) {
       return;
     }
     size_t cap = t->cap ? 2 * t->cap : 1024;
-    while (cap < t->n + (size_t)k + 1) cap *= 2;
+    while (cap < t->n + (size_t)k + 1)
+      cap *= 2;
     char *s = realloc(t->s, cap);
     if (!s) {
       t->failed = 1;
@@ -65,9 +66,12 @@ static void json_string(text *t, const char *s) {
   text_add(t, "\"");
   for (; s && *s; ++s) {
     unsigned char c = (unsigned char)*s;
-    if (c == '"' || c == '\\') text_add(t, "\\%c", c);
-    else if (c < 0x20) text_add(t, "\\u%04x", c);
-    else text_add(t, "%c", c);
+    if (c == '"' || c == '\\')
+      text_add(t, "\\%c", c);
+    else if (c < 0x20)
+      text_add(t, "\\u%04x", c);
+    else
+      text_add(t, "%c", c);
   }
   text_add(t, "\"");
 }
@@ -93,9 +97,7 @@ void hoc_report_destroy(hoc_report **report) {
   *report = NULL;
 }
 
-size_t hoc_report_num_stages(const hoc_report *report) {
-  return report ? (size_t)report->r.n : 0;
-}
+size_t hoc_report_num_stages(const hoc_report *report) { return report ? (size_t)report->r.n : 0; }
 
 const hoc_stage *hoc_report_stage(const hoc_report *report, size_t i) {
   return report && i < (size_t)report->r.n ? &report->r.s[i].stage : NULL;
@@ -127,9 +129,7 @@ const double *hoc_report_quality(const hoc_report *report) {
   return report ? report->quality : NULL;
 }
 
-size_t hoc_report_num_findings(const hoc_report *report) {
-  return report ? report->n_findings : 0;
-}
+size_t hoc_report_num_findings(const hoc_report *report) { return report ? report->n_findings : 0; }
 
 const char *hoc_report_finding(const hoc_report *report, size_t i, hoc_event_kind *kind) {
   if (!report || i >= report->n_findings) return NULL;
@@ -172,7 +172,8 @@ static hoc_status find_tangled(hoc_report *report, const hoc_mesh *mesh, const d
                            ? "try a smaller --size-min or --size, or a larger --curvature"
                            : "not with the input's elements: a finer input mesh there may help";
   size_t ne = hoc_mesh_num_elements(mesh), shown = 0, total = 0;
-  for (size_t e = 0; e < ne; ++e) total += q[e] == 0.0;
+  for (size_t e = 0; e < ne; ++e)
+    total += q[e] == 0.0;
   if (!total) return HOC_OK;
   text t = {0};
   const hoc_stage *s = opt ? &opt->stage : NULL;
