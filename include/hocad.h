@@ -458,8 +458,9 @@ typedef struct hoc_mesh_options {
   int keep_nodes;         /**< hoc_mesh_repair: optimise from the input's own high-order
                                nodes only, never from nodes re-placed from its corners */
   int equispaced;         /**< hoc_mesh_model: the result converted to equispaced nodes, what
-                               MSH and VTU files hold, and measured as a "written" stage when
-                               the node set differs (order 3 and above) */
+                               MSH and VTU files hold, and measured as a "written" stage, when
+                               the node set differs (from order 3: below it every node set is
+                               the equispaced one) */
   int keep_stages;        /**< hoc_mesh_model: the report keeps the linear mesh and the raised
                                one before optimisation (hoc_report_linear, hoc_report_raised) */
   int check_gradient;     /**< before each optimisation, compare the analytic gradient with
@@ -480,7 +481,8 @@ typedef struct hoc_report hoc_report;
 /** `hocad mesh`: the paper's three steps and the repairs where they leave
  *  elements tangled. (1) A linear mesh (hoc_mesh_generate_linear, or
  *  options->linear), (2) raised to the order (hoc_mesh_elevate), (3)
- *  optimised (hoc_mesh_optimize). Where elements stay tangled: first their
+ *  optimised (hoc_mesh_optimize; unless options->optimize is 0, and from
+ *  order 2). Where elements stay tangled: first their
  *  split on a copy (as hoc_mesh_repair splits), kept if it leaves none
  *  tangled; else their faces meshed again with edges half as long and
  *  (unless options->size_min is set) a minimum size ten times smaller,
@@ -514,7 +516,7 @@ hoc_status hoc_mesh_model(hoc_model *model, const hoc_mesh_options *options, hoc
  *  two rings around them), until a result has no tangled element or each
  *  chain made `refinements` splits; the result with the fewest tangled
  *  elements is kept.
- *  @param[in]  in       the mesh (order 2 and above to be optimised); it is not changed
+ *  @param[in]  in       the mesh; it is not changed
  *  @param[in]  options  NULL for defaults (order, nodeset, sizes, linear, optimize,
  *                       equispaced and keep_stages are not used)
  *  @param[out] mesh     NULL, or the result on the same model; NULL on failure
