@@ -400,7 +400,8 @@ typedef struct hoc_stage {
   const char *name; /**< "linear", "high-order", "input", "re-placed", "split", "optimized",
                          "smoothed" or "written" (a static string) */
   hoc_quality_stats stats; /**< q of the stage's mesh */
-  double seconds;          /**< wall time to make the stage (measuring included) */
+  double seconds;          /**< wall time the pipeline took to make the stage (an "input"
+                                stage: to copy it), its measurement (stats.seconds) apart */
   int optimized;           /**< the stage is an optimiser's result: the fields below are set */
   int iterations;          /**< the optimiser's sweeps */
   int converged;           /**< hoc_optimize_result.converged */
