@@ -432,8 +432,9 @@ typedef struct hoc_event {
                                 analytic gradient and central differences */
 } hoc_event;
 
-/** Called on each event; return nonzero to cancel: the pipeline then fails
- *  with HOC_ERR_INTERRUPTED and returns neither a mesh nor a report. */
+/** Called on each event, on the thread that called the pipeline; return
+ *  nonzero to cancel: the pipeline then fails with HOC_ERR_INTERRUPTED and
+ *  returns neither a mesh nor a report. */
 typedef int (*hoc_event_fn)(void *user, const hoc_event *event);
 
 /** Options of hoc_mesh_model and hoc_mesh_repair (fill with
