@@ -158,7 +158,8 @@ static hoc_status linear_mesh(const hoc_run *run, hoc_model *model, hoc_linear_o
    * face, not only on those meshed again (the aircraft at order 7:
    * 192 990 elements from 7 818); halving the edges of every face
    * would at most quadruple the mesh, so beyond that it is undone */
-  if (lo->size_min < unlowered_min && hoc_mesh_num_elements(*lin) > 4 * prev_elements) {
+  if (lo->size_min < unlowered_min &&
+      hoc_mesh_num_elements(*lin) > HOC_PIPELINE_REMESH_GROWTH * prev_elements) {
     hoc_status status = hoc_run_event(
         run, HOC_EVENT_NOTE,
         "with the minimum size %g the faces made %zu elements, more than four times the %zu "
@@ -259,7 +260,7 @@ static hoc_status mesh_model_run(const hoc_run *run, hoc_model *model, model_mes
       double size_max, size_min;
       hoc_linear_sizes(model, &lo, &size_max, &size_min);
       unlowered_min = size_min;
-      lo.size_min = size_min / 10;
+      lo.size_min = size_min / HOC_PIPELINE_REMESH_MIN_SIZE;
     }
     if (!m->kept_ho || hoc_stages_last(&attempt_r)->stage.stats.tangled <
                            hoc_stages_last(&kept_r)->stage.stats.tangled) {
@@ -296,7 +297,8 @@ hoc_status hoc_mesh_model(hoc_model *model, const hoc_mesh_options *options, hoc
   hoc_run run;
   HOC_TRY(run_start(&run, options));
   HOC_TRY(check_model_options(model, &run.o));
-  if (run.o.refinements < 0) run.o.refinements = run.o.linear ? 3 : 2;
+  if (run.o.refinements < 0)
+    run.o.refinements = run.o.linear ? HOC_PIPELINE_SPLITS_GIVEN_LINEAR : HOC_PIPELINE_REMESHINGS;
   model_meshes m = {0};
   hoc_stages r = {0};
   hoc_mesh *final = NULL;
@@ -351,7 +353,7 @@ hoc_status hoc_mesh_repair(const hoc_mesh *in, const hoc_mesh_options *options, 
   HOC_CHECK(in, HOC_ERR_ARGUMENT, "no mesh given");
   hoc_run run;
   HOC_TRY(run_start(&run, options));
-  if (run.o.refinements < 0) run.o.refinements = 6;
+  if (run.o.refinements < 0) run.o.refinements = HOC_PIPELINE_SPLITS_REPAIR;
   hoc_mesh *cur = NULL, *start = NULL;
   hoc_report *rep = NULL;
   hoc_stages r = {0};

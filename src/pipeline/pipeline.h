@@ -7,6 +7,45 @@
 
 #include "core/error.h"
 
+/* The pipelines' tunables, each with the class of problem it serves (the
+ * messages and the public docs name their values). ------------------------ */
+
+/* Default refinements: remeshings of the faces of tangled elements before
+ * their split (a mesh too coarse for the curvature of its faces folds when
+ * curved), splits per chain with a given linear mesh (which is never meshed
+ * again), and splits per chain of hoc_mesh_repair (slivers of another
+ * mesher's mesh: gmsh 4.8's aircraft at order 3 untangles at the sixth). */
+#define HOC_PIPELINE_REMESHINGS 2
+#define HOC_PIPELINE_SPLITS_GIVEN_LINEAR 3
+#define HOC_PIPELINE_SPLITS_REPAIR 6
+/* A remeshing bounds the edges on the faces of tangled elements by this
+ * fraction of their longest edge, and lowers the minimum size this many
+ * times (features below the default minimum size, e.g. the end of a
+ * thread), unless the mesh then grows more than HOC_PIPELINE_REMESH_GROWTH
+ * times (the curvature sizing then goes finer on every face). */
+#define HOC_PIPELINE_REMESH_EDGE 0.5
+#define HOC_PIPELINE_REMESH_MIN_SIZE 10
+#define HOC_PIPELINE_REMESH_GROWTH 4
+/* Elements below this fraction of the linear mesh's min q are poor: an
+ * untangled result has them optimised once more ("smoothed"), and those at
+ * a CAD cusp (two curves meeting under HOC_PIPELINE_CUSP_DEGREES) are
+ * named, since curving cannot open them. */
+#define HOC_PIPELINE_POOR 0.9
+#define HOC_PIPELINE_CUSP_DEGREES 2.0
+/* hoc_mesh_repair starts from nodes re-placed from the corners unless they
+ * tangle over 1/HOC_PIPELINE_REPLACED_SLACK more elements than the input's
+ * (another mesher's placement and hocad's fold in different places). */
+#define HOC_PIPELINE_REPLACED_SLACK 10
+/* From this order on, a split of an optimised mesh is optimised locally:
+ * only the nodes of the split's children and of HOC_PIPELINE_LOCAL_RINGS
+ * rings of elements around them move (the rest of the mesh is where the
+ * first optimisation left it), as are the poor elements of "smoothed".
+ * Below it the whole mesh is optimised again, which costs little there
+ * (orders 2, 3, 5 and gmsh's order-3 meshes were measured so); at order 10
+ * that took as long as the first optimisation, each split. */
+#define HOC_PIPELINE_LOCAL_MIN_ORDER 6
+#define HOC_PIPELINE_LOCAL_RINGS 2
+
 /* The most stages one attempt has: linear, high-order, split, optimized,
  * smoothed, written (hoc_mesh_repair: input, re-placed or split, optimized). */
 enum { HOC_PIPELINE_MAX_STAGES = 6 };

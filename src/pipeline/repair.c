@@ -8,16 +8,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* From this order on, a split of an optimised mesh is optimised locally:
- * only the nodes of the split's children and of LOCAL_RINGS rings of
- * elements around them move (the rest of the mesh is where the first
- * optimisation left it). Below it the whole mesh is optimised again, which
- * costs little there (orders 2, 3, 5 and gmsh's order-3 meshes were
- * measured so); at order 10 that took as long as the first optimisation,
- * each split. */
-#define LOCAL_MIN_ORDER 6
-#define LOCAL_RINGS 2
-
 /* The optimiser's sweeps as events. */
 static int iteration_event(void *user, const hoc_optimize_iteration *it) {
   const hoc_run *run = user;
@@ -53,7 +43,7 @@ hoc_status hoc_repair_optimize(const hoc_run *run, hoc_stages *r, const char *na
   oo.progress = iteration_event;
   oo.progress_user = (void *)run;
   oo.free_elements = free;
-  oo.free_rings = LOCAL_RINGS;
+  oo.free_rings = HOC_PIPELINE_LOCAL_RINGS;
   HOC_TRY(hoc_run_event(run, HOC_EVENT_PROGRESS, "optimizing %zu elements",
                         hoc_mesh_num_elements(mesh)));
   hoc_optimize_result res;
@@ -104,9 +94,9 @@ static hoc_status split_tangled(const hoc_run *run, hoc_stages *r, int n_keep, h
   hoc_status status = HOC_OK;
   HOC_ALLOC_GOTO(tangled, ne, done);
   double t0 = hoc_pipeline_now();
-  /* from LOCAL_MIN_ORDER on, a split of the optimised mesh is optimised
-   * locally: its children and LOCAL_RINGS rings around them */
-  int local = !base && hoc_mesh_order(mesh) >= LOCAL_MIN_ORDER;
+  /* from HOC_PIPELINE_LOCAL_MIN_ORDER on, a split of the optimised mesh is
+   * optimised locally: its children and the rings around them */
+  int local = !base && hoc_mesh_order(mesh) >= HOC_PIPELINE_LOCAL_MIN_ORDER;
   if (local) HOC_ALLOC_GOTO(pieces, ne, done);
   HOC_TRY_GOTO(hoc_mesh_measure(mesh, run->o.measure, NULL, tangled, NULL), done);
   HOC_TRY_GOTO(hoc_mesh_split(base ? base : mesh, tangled, kind, fine, pieces), done);
@@ -267,7 +257,7 @@ hoc_status hoc_repair_refine_faces(const hoc_run *run, hoc_stages *r, const hoc_
   HOC_ALLOC_GOTO(tangled, ne, done);
   if (!*face_size) HOC_ALLOC_GOTO(*face_size, (size_t)hoc_model_num_faces(model) + 1, done);
   HOC_TRY_GOTO(hoc_mesh_measure(ho, run->o.measure, NULL, tangled, NULL), done);
-  HOC_TRY_GOTO(hoc_mesh_refine_bounds(lin, tangled, 0.5, *face_size), done);
+  HOC_TRY_GOTO(hoc_mesh_refine_bounds(lin, tangled, HOC_PIPELINE_REMESH_EDGE, *face_size), done);
   r->refinements++;
   r->remeshings++;
   size_t total = 0;
@@ -287,15 +277,15 @@ done:
 }
 
 /* Elements an untangled optimised mesh *mesh has below 0.9 x the linear
- * mesh's min q (the bound hocad aims at): their nodes and those of
- * LOCAL_RINGS rings around them optimised once more, alone (a stage
+ * mesh's min q (HOC_PIPELINE_POOR, the bound hocad aims at): their nodes and
+ * those of the rings around them optimised once more, alone (a stage
  * "smoothed"). Kept only if that raises the min q: the objective is a sum
  * over the elements, not their minimum. (The aircraft at order 10: its
  * splits next to a CAD curve 0.002 long, at the wing root, left 0.00197
  * against a linear 0.00230; this gives 0.00219 in 7 s.) */
 hoc_status hoc_repair_smooth_low(const hoc_run *run, hoc_stages *r, hoc_mesh **mesh) {
   const hoc_stage *last = &hoc_stages_last(r)->stage;
-  double bound = 0.9 * r->s[0].stage.stats.min;
+  double bound = HOC_PIPELINE_POOR * r->s[0].stage.stats.min;
   if (!last->optimized || last->stats.tangled || !(last->stats.min < bound)) return HOC_OK;
   size_t ne = hoc_mesh_num_elements(*mesh), n_low = 0;
   double *q = NULL;
@@ -357,7 +347,8 @@ static hoc_status replace_nodes(const hoc_run *run, hoc_stages *r, const hoc_mes
     return s;
   }
   size_t in = r->s[0].stage.stats.tangled;
-  if (hoc_stages_last(r)->stage.stats.tangled > in + in / 10) { /* clearly worse: not used */
+  if (hoc_stages_last(r)->stage.stats.tangled > in + in / HOC_PIPELINE_REPLACED_SLACK) {
+    /* clearly worse: not used */
     r->n--;
     hoc_mesh_destroy(alt);
   }

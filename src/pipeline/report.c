@@ -209,7 +209,7 @@ static hoc_status find_tangled(hoc_report *report, const hoc_mesh *mesh, const d
  * short, e.g. on a mesh read from a file). */
 static hoc_status find_cusps(hoc_report *report, const hoc_stages *r, const hoc_mesh *mesh,
                              const double *q) {
-  double bound = 0.9 * r->s[0].stage.stats.min, rest = 1; /* q <= 1 */
+  double bound = HOC_PIPELINE_POOR * r->s[0].stage.stats.min, rest = 1; /* q <= 1 */
   size_t ne = hoc_mesh_num_elements(mesh), low = 0, at_cusp = 0;
   char list[512] = "";
   size_t len = 0;
@@ -220,7 +220,7 @@ static hoc_status find_cusps(hoc_report *report, const hoc_stages *r, const hoc_
     if (q[e] == 0.0 || (q[e] >= bound && q[e] >= rest)) continue; /* changes nothing below */
     hoc_cusp c;
     int found = 0;
-    if (hoc_mesh_element_cusp(mesh, e, 2.0, &c, &found) != HOC_OK) found = 0;
+    if (hoc_mesh_element_cusp(mesh, e, HOC_PIPELINE_CUSP_DEGREES, &c, &found) != HOC_OK) found = 0;
     if (!found) {
       if (q[e] < rest) rest = q[e];
       low += q[e] < bound;
