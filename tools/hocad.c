@@ -520,14 +520,14 @@ static int write_outputs(const options *o, const hoc_mesh *mesh, const double *q
   return EXIT_OK;
 }
 
-/* The report as JSON, if asked for; say: print its name. */
+/* The report as JSON, if asked for; tell: print its name. */
 static int write_json(const options *o, const hoc_report *r, double model_seconds,
-                      double write_seconds, int say) {
+                      double write_seconds, int tell) {
   if (!o->json) return EXIT_OK;
   hoc_report_files files = {o->model, o->mesh_in, model_seconds, write_seconds};
   hoc_status st = hoc_report_write_json(r, &files, o->json);
   if (st != HOC_OK) return fail(st, 0);
-  if (!o->quiet && say) printf("wrote %s\n", o->json);
+  if (!o->quiet && tell) printf("wrote %s\n", o->json);
   return EXIT_OK;
 }
 
