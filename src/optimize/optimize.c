@@ -35,8 +35,7 @@
  * the exact tests find folded a residual at the point where they found
  * sigma < 0 (see the end of hoc_mesh_optimize).
  */
-#include "mesh/mesh.h"
-#include "quality/quality.h"
+#include "optimize/optimize_impl.h"
 
 #include <float.h>
 #include <math.h>
@@ -46,7 +45,7 @@
 #include <string.h>
 #include <time.h>
 
-static double now(void) {
+double hoc_opt_now(void) {
   struct timespec ts;
   clock_gettime(CLOCK_MONOTONIC, &ts);
   return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
@@ -60,109 +59,9 @@ void hoc_optimize_options_default(hoc_optimize_options *o) {
   o->tolerance = 0.1;
 }
 
-/* A family of blocks: each block a set of free nodes updated together. */
-typedef struct blockset {
-  size_t n_blocks;
-  size_t *bn_start, *bn_node; /* block -> its nodes */
-  size_t *be_start, *be_elem; /* block -> the elements it touches */
-  size_t *bd_start;     /* block -> first of its unknowns in step[] */
-  size_t *node_block;   /* [n_nodes] block of a free node (SIZE_MAX if fixed) */
-  int *node_off;        /* [n_nodes] offset of the node's unknowns in its block */
-  size_t *carry_start;  /* [n_blocks+1] nodes a vertex block carries ... */
-  size_t *carry_node;
-  double *carry_w;      /* ... and their weights */
-  int max_nd;           /* most unknowns in a block */
-  int n_colors;
-  size_t *color_start;  /* [n_colors+1] */
-  size_t *color_block;
-  /* Blocks woken since their colour last ran, per colour (most sleep: a
-   * colour then looks at these instead of all its blocks) */
-  int *block_color;        /* [n_blocks] */
-  size_t *queue_head;      /* [n_colors] first queued block, SIZE_MAX if none */
-  size_t *queue_next;      /* [n_blocks] next in its colour's queue */
-  unsigned char *queued;   /* [n_blocks] */
-  unsigned char *scan_all; /* [n_colors] every block may be active: look at all */
-} blockset;
-
-typedef struct opt {
-  hoc_mesh *m;
-  const hoc_model *model;
-  const hoc_quality_tables *t;
-  hoc_measure measure;
-  int np, nq;
-  unsigned char *ndof;  /* [n_nodes] unknowns of the node: 0, 1 (t) or 2 (u, v) */
-  size_t *ne_start;     /* [n_nodes+1] node -> elements */
-  size_t *ne_elem;      /* element */
-  int *ne_local;        /* local index of the node in it */
-  size_t *ns_start;     /* [n_nodes+1] node -> slots */
-  size_t *ns_slot;
-  size_t *nl_start;     /* [n_nodes+1] node -> lines */
-  size_t *nl_line;
-  blockset fam[2];      /* 0: vertices (with carried stars), edges, interiors; 1: single nodes */
-  blockset *B;          /* the family being swept */
-  int max_nd;           /* most unknowns in a block of either family */
-  /* state */
-  double *dz;           /* [n_nodes][6] dx/dz: (phi_u, phi_v) or (c', 0) */
-  double *normal;       /* [n_slots][3] unit CAD normal at each slot, oriented */
-  double *delta;        /* [n_elems] regularisation of the sweep */
-  unsigned char *valid; /* [n_elems] not tangled (Definition 2) */
-  unsigned char *pvalid;/* [n_elems] not folded in the (u,v) plane */
-  unsigned char *xvalid;      /* [n_elems] valid by the exact test too: in a protected run a step
-                                 may not fold it between samples (one folded there already may
-                                 stay so for a while) */
-  int protect;                /* a protected run (see hoc_mesh_optimize) */
-  unsigned char *fragile;     /* [n_elems] guarded as in a protected run (see mark_fragile) */
-  unsigned char *on_boundary; /* [n_elems] has a node on a CAD curve or vertex: kept unfolded in
-                           (u,v) so no node leaves the trimmed face (inside, 3D validity of
-                           the neighbours is the barrier) */
-  unsigned char *region;/* [n_elems] tangled or next to a tangled element: regularised, and
-                           free to pass through sigma = 0 during the sweep */
-  unsigned char *was_region; /* [n_elems] region of the previous sweep */
-  unsigned char *dirty; /* [n_elems] a node moved since the last sweep_start */
-  double *delta_own;    /* [n_elems] regularisation from the element's own tangling */
-  unsigned char *has_fold; /* [n_elems] tangled by the exact tests alone (the second phase): */
-  double *fold_rs;      /* [n_elems][2] a point where they find sigma < 0, a residual there */
-  double *fe, *qe;      /* [n_elems] objective part and q, as of the last sweep_start */
-  double *hsize;        /* [n_nodes] local length: bound on one step's displacement */
-  unsigned char *active;/* [n_nodes] */
-  unsigned char *near;  /* [n_nodes] within NEAR_RINGS elements of a tangled element ... */
-  unsigned char *near_e;/* [n_elems] (scratch of mark_near) */
-  int local;            /* ... and only blocks with such a node move (the exact phase while
-                           some element is tangled) */
-  unsigned char *touched; /* [n_elems] has a node that may move (NULL: no node is held by
-                             hoc_optimize_options.free_elements) */
-  double min_gain;      /* per node: a step that lowers f by less puts the block to sleep */
-  double eps;           /* regularisation scale of tangled elements (relative to their size) */
-  int relax_uv;         /* second attempt: relaxed elements may fold in (u, v) too */
-  int exact;            /* the tangle test with the exact fold tests, and dense edge
-                           residuals while untangling (the second phase) */
-  double wake_factor;   /* a move must gain this many times min_gain to wake its neighbours */
-  unsigned char *moving;/* [n_nodes] use the trial state of this node */
-  /* trial state */
-  double *step;         /* [unknowns] Gauss-Newton direction of each block */
-  double *alpha;        /* [n_blocks] step length */
-  double *f0, *fnew;    /* [n_blocks] local objective before / after */
-  double *slope;        /* [n_blocks] g . step (< 0) */
-  unsigned char *state; /* [n_blocks] 0 idle, 1 trying, 2 accepted */
-  size_t *list;         /* [n_blocks] scratch */
-  size_t *committed;    /* [n_blocks] blocks of the current colour that moved */
-  double *tpar;         /* [n_nodes][2] trial parameters */
-  double *txyz;         /* [n_nodes][3] */
-  double *tdz;          /* [n_nodes][6] */
-  double *tslot_uv;     /* [n_slots][2] */
-  double *tnormal;      /* [n_slots][3] */
-} opt;
-
-typedef struct scratch {
-  double *x, *n, *r, *J, *uv, *Jz, *H, *g, *L;
-  double *w;         /* [np] block_model: a node's weight in the block, */
-  int *off;          /* its first unknown, */
-  unsigned char *nd; /* and its unknowns (0: not moved by the block) */
-} scratch;
-
-static void opt_free(opt *o) {
+void hoc_opt_free(hoc_opt *o) {
   for (int f = 0; f < 2; ++f) {
-    blockset *b = &o->fam[f];
+    hoc_opt_blockset *b = &o->fam[f];
     void *q[] = {b->bn_start,    b->bn_node,     b->be_start,    b->be_elem,    b->bd_start,
                  b->node_block,  b->node_off,    b->carry_start, b->carry_node, b->carry_w,
                  b->color_start, b->color_block, b->block_color, b->queue_head, b->queue_next,
@@ -181,18 +80,18 @@ static void opt_free(opt *o) {
 }
 
 /* CSR from (key, value) pairs produced by a callback-free double pass. */
-static hoc_status csr_alloc(size_t n, size_t total, size_t **start, size_t **items) {
+hoc_status hoc_opt_csr_alloc(size_t n, size_t total, size_t **start, size_t **items) {
   *start = hoc_calloc(n + 1, sizeof **start);
   *items = hoc_calloc(total + 1, sizeof **items);
   HOC_CHECK(*start && *items, HOC_ERR_MEMORY, "out of memory for the optimiser's adjacency");
   return HOC_OK;
 }
 
-static void csr_finish_counts(size_t n, size_t *start) {
+void hoc_opt_csr_finish_counts(size_t n, size_t *start) {
   for (size_t i = 0; i < n; ++i) start[i + 1] += start[i];
 }
 
-static void csr_restore(size_t n, size_t *start) {
+void hoc_opt_csr_restore(size_t n, size_t *start) {
   for (size_t i = n; i > 0; --i) start[i] = start[i - 1];
   start[0] = 0;
 }
@@ -202,18 +101,12 @@ static double dist3(const double *a, const double *b) {
               (a[2] - b[2]) * (a[2] - b[2]));
 }
 
-static void cross(const double *a, const double *b, double *c) {
-  c[0] = a[1] * b[2] - a[2] * b[1];
-  c[1] = a[2] * b[0] - a[0] * b[2];
-  c[2] = a[0] * b[1] - a[1] * b[0];
-}
-
 /* Unit normal of face f at uv from its derivatives, oriented like the mesh;
  * where the parametrisation is singular, from just inside the face. */
-static hoc_status face_normal(const opt *o, int f, const double *uv, const double *du,
+static hoc_status face_normal(const hoc_opt *o, int f, const double *uv, const double *du,
                               const double *dv, double *n) {
   double c[3], a[3], b[3];
-  cross(du, dv, c);
+  hoc_opt_cross(du, dv, c);
   double len = sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
   double scale = du[0] * du[0] + du[1] * du[1] + du[2] * du[2] + dv[0] * dv[0] +
                  dv[1] * dv[1] + dv[2] * dv[2];
@@ -225,7 +118,7 @@ static hoc_status face_normal(const opt *o, int f, const double *uv, const doubl
       p[d] = uv[d] + 1e-5 * (face->hi[d] - face->lo[d]) * (mid > uv[d] ? 1.0 : -1.0);
     }
     HOC_TRY(hoc_cad_face_eval(o->model, f, 1, p, NULL, a, b));
-    cross(a, b, c);
+    hoc_opt_cross(a, b, c);
     len = sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
   }
   double s = (o->m->face_orient[f] < 0 ? -1.0 : 1.0) / (len > 0 ? len : 1.0);
@@ -235,13 +128,7 @@ static hoc_status face_normal(const opt *o, int f, const double *uv, const doubl
 
 /* Setup ------------------------------------------------------------------- */
 
-/* Append node to block b's list if free and not there yet. */
-typedef struct growlist {
-  size_t *v;
-  size_t n, cap;
-} growlist;
-
-static hoc_status grow_push(growlist *g, size_t x) {
+hoc_status hoc_grow_push(hoc_growlist *g, size_t x) {
   if (g->n == g->cap) {
     size_t cap = g->cap ? 2 * g->cap : 256;
     size_t *v = hoc_realloc(g->v, cap, sizeof *v);
@@ -255,15 +142,15 @@ static hoc_status grow_push(growlist *g, size_t x) {
 
 /* Blocks of family 0: vertices, edges, element interiors; of family 1:
  * single nodes. Their nodes, footprints, unknowns and carried nodes. */
-static hoc_status build_blocks(opt *o, int family) {
-  blockset *B = &o->fam[family];
+hoc_status hoc_opt_build_blocks(hoc_opt *o, int family) {
+  hoc_opt_blockset *B = &o->fam[family];
   hoc_mesh *m = o->m;
   size_t nn = m->n_nodes, ne = m->n_elems, np = (size_t)o->np;
   int p = m->order;
   HOC_ALLOC(B->node_block, nn);
   HOC_ALLOC(B->node_off, nn);
   for (size_t i = 0; i < nn; ++i) B->node_block[i] = SIZE_MAX;
-  growlist start = {0}, nodes = {0};
+  hoc_growlist start = {0}, nodes = {0};
   hoc_status status = HOC_OK;
   /* vertex blocks first, then edge blocks, then interior blocks */
   for (int kind = 0; kind < 3; ++kind)
@@ -275,8 +162,8 @@ static hoc_status build_blocks(opt *o, int family) {
           size_t i = cn[k];
           if (!o->ndof[i] || B->node_block[i] != SIZE_MAX) continue;
           B->node_block[i] = start.n;
-          HOC_TRY_GOTO(grow_push(&start, nodes.n), done);
-          HOC_TRY_GOTO(grow_push(&nodes, i), done);
+          HOC_TRY_GOTO(hoc_grow_push(&start, nodes.n), done);
+          HOC_TRY_GOTO(hoc_grow_push(&nodes, i), done);
         }
         continue;
       }
@@ -286,8 +173,8 @@ static hoc_status build_blocks(opt *o, int family) {
           size_t i = cn[k];
           if (!o->ndof[i] || B->node_block[i] != SIZE_MAX) continue;
           B->node_block[i] = start.n;
-          HOC_TRY_GOTO(grow_push(&start, nodes.n), done);
-          HOC_TRY_GOTO(grow_push(&nodes, i), done);
+          HOC_TRY_GOTO(hoc_grow_push(&start, nodes.n), done);
+          HOC_TRY_GOTO(hoc_grow_push(&nodes, i), done);
         }
       } else if (kind == 1) {
         /* an edge seen from its second element has its nodes in a block already */
@@ -296,9 +183,9 @@ static hoc_status build_blocks(opt *o, int family) {
           for (int j = 0; j < p - 1; ++j) {
             size_t i = cn[3 + k * (p - 1) + j];
             if (!o->ndof[i] || B->node_block[i] != SIZE_MAX) continue;
-            if (nodes.n == first) HOC_TRY_GOTO(grow_push(&start, nodes.n), done);
+            if (nodes.n == first) HOC_TRY_GOTO(hoc_grow_push(&start, nodes.n), done);
             B->node_block[i] = start.n - 1;
-            HOC_TRY_GOTO(grow_push(&nodes, i), done);
+            HOC_TRY_GOTO(hoc_grow_push(&nodes, i), done);
           }
         }
       } else {
@@ -306,15 +193,15 @@ static hoc_status build_blocks(opt *o, int family) {
         for (size_t k = 3 * (size_t)p; k < np; ++k) {
           size_t i = cn[k];
           if (!o->ndof[i] || B->node_block[i] != SIZE_MAX) continue;
-          if (nodes.n == first) HOC_TRY_GOTO(grow_push(&start, nodes.n), done);
+          if (nodes.n == first) HOC_TRY_GOTO(hoc_grow_push(&start, nodes.n), done);
           B->node_block[i] = start.n - 1;
-          HOC_TRY_GOTO(grow_push(&nodes, i), done);
+          HOC_TRY_GOTO(hoc_grow_push(&nodes, i), done);
         }
       }
     }
   size_t nb = start.n;
   B->n_blocks = nb;
-  HOC_TRY_GOTO(grow_push(&start, nodes.n), done);
+  HOC_TRY_GOTO(hoc_grow_push(&start, nodes.n), done);
   B->bn_start = start.v;
   B->bn_node = nodes.v;
   start.v = nodes.v = NULL;
@@ -335,27 +222,27 @@ static hoc_status build_blocks(opt *o, int family) {
   }
   /* footprints: the elements of the block's nodes */
   {
-    growlist fs = {0}, fe = {0};
+    hoc_growlist fs = {0}, fe = {0};
     for (size_t b = 0; b < nb && status == HOC_OK; ++b) {
-      status = grow_push(&fs, fe.n);
+      status = hoc_grow_push(&fs, fe.n);
       for (size_t a = B->bn_start[b]; a < B->bn_start[b + 1] && status == HOC_OK; ++a) {
         size_t i = B->bn_node[a];
         for (size_t c = o->ne_start[i]; c < o->ne_start[i + 1] && status == HOC_OK; ++c) {
           size_t e = o->ne_elem[c];
           int seen = 0;
           for (size_t d = fs.v[b]; d < fe.n && !seen; ++d) seen = fe.v[d] == e;
-          if (!seen) status = grow_push(&fe, e);
+          if (!seen) status = hoc_grow_push(&fe, e);
         }
       }
     }
-    if (status == HOC_OK) status = grow_push(&fs, fe.n);
+    if (status == HOC_OK) status = hoc_grow_push(&fs, fe.n);
     B->be_start = fs.v;
     B->be_elem = fe.v;
     if (status != HOC_OK) goto done;
   }
   /* carried nodes of face-interior vertex blocks */
   {
-    growlist cs = {0}, cn = {0};
+    hoc_growlist cs = {0}, cn = {0};
     double *w = NULL;
     size_t wcap = 0;
     size_t *last = hoc_realloc(NULL, nn + 1, sizeof *last); /* block that last took the node */
@@ -363,7 +250,7 @@ static hoc_status build_blocks(opt *o, int family) {
     for (size_t i = 0; last && i <= nn; ++i)
       last[i] = SIZE_MAX;
     for (size_t b = 0; b < nb && status == HOC_OK; ++b) {
-      status = grow_push(&cs, cn.n);
+      status = hoc_grow_push(&cs, cn.n);
       size_t k = B->bn_node[B->bn_start[b]];
       int vertex = family == 0 && B->bn_start[b + 1] - B->bn_start[b] == 1 && p >= 2 &&
                    o->ndof[k] == 2;
@@ -379,7 +266,7 @@ static hoc_status build_blocks(opt *o, int family) {
           double lam = kk == 0 ? 1 - r - s : kk == 1 ? r : s;
           if (!(lam > 1e-12)) continue;
           last[node] = b;
-          status = grow_push(&cn, node);
+          status = hoc_grow_push(&cn, node);
           if (status != HOC_OK) break;
           if (cn.n > wcap) {
             wcap = cn.cap;
@@ -395,7 +282,7 @@ static hoc_status build_blocks(opt *o, int family) {
       }
     }
     free(last);
-    if (status == HOC_OK) status = grow_push(&cs, cn.n);
+    if (status == HOC_OK) status = hoc_grow_push(&cs, cn.n);
     B->carry_start = cs.v;
     B->carry_node = cn.v;
     B->carry_w = w;
@@ -438,12 +325,12 @@ static hoc_status build_blocks(opt *o, int family) {
       if (c + 1 > max_colors) max_colors = c + 1;
     }
     B->n_colors = max_colors;
-    if (status == HOC_OK) status = csr_alloc((size_t)max_colors, nb, &B->color_start, &B->color_block);
+    if (status == HOC_OK) status = hoc_opt_csr_alloc((size_t)max_colors, nb, &B->color_start, &B->color_block);
     if (status == HOC_OK) {
       for (size_t b = 0; b < nb; ++b) B->color_start[color[b] + 1]++;
-      csr_finish_counts((size_t)max_colors, B->color_start);
+      hoc_opt_csr_finish_counts((size_t)max_colors, B->color_start);
       for (size_t b = 0; b < nb; ++b) B->color_block[B->color_start[color[b]]++] = b;
-      csr_restore((size_t)max_colors, B->color_start);
+      hoc_opt_csr_restore((size_t)max_colors, B->color_start);
     }
     if (status == HOC_OK) {
       B->block_color = color;
@@ -470,7 +357,7 @@ done:
 
 /* elem[ne] grown by `rings` rings of elements (sharing a node); node[nn]
  * becomes the nodes of the grown set. */
-static void grow_rings(const hoc_mesh *m, unsigned char *elem, unsigned char *node, int rings) {
+void hoc_opt_grow_rings(const hoc_mesh *m, unsigned char *elem, unsigned char *node, int rings) {
   size_t ne = m->n_elems, np = (size_t)m->np;
   memset(node, 0, m->n_nodes);
   for (int r = 0;; ++r) {
@@ -485,7 +372,7 @@ static void grow_rings(const hoc_mesh *m, unsigned char *elem, unsigned char *no
 
 /* Only the nodes of flagged elements and of those within `rings` rings of
  * them (sharing a node) keep their unknowns. */
-static hoc_status restrict_free(opt *o, const unsigned char *flagged, int rings) {
+static hoc_status restrict_free(hoc_opt *o, const unsigned char *flagged, int rings) {
   const hoc_mesh *m = o->m;
   size_t ne = m->n_elems, nn = m->n_nodes, np = (size_t)o->np;
   unsigned char *elem = hoc_calloc(ne + 1, 1), *node = hoc_calloc(nn + 1, 1);
@@ -495,7 +382,7 @@ static hoc_status restrict_free(opt *o, const unsigned char *flagged, int rings)
     return HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
   }
   memcpy(elem, flagged, ne);
-  grow_rings(m, elem, node, rings);
+  hoc_opt_grow_rings(m, elem, node, rings);
   for (size_t i = 0; i < nn; ++i)
     if (!node[i]) o->ndof[i] = 0;
   memset(elem, 0, ne);
@@ -508,7 +395,7 @@ static hoc_status restrict_free(opt *o, const unsigned char *flagged, int rings)
 
 /* The part of f the free nodes can change (all of it without
  * free_elements): the stopping rules' measure of progress. */
-static double free_objective(const opt *o, double f) {
+static double free_objective(const hoc_opt *o, double f) {
   if (!o->touched) return f;
   double fl = 0;
   for (size_t e = 0; e < o->m->n_elems; ++e)
@@ -516,7 +403,7 @@ static double free_objective(const opt *o, double f) {
   return fl;
 }
 
-static hoc_status setup(opt *o, hoc_mesh *m, hoc_measure measure, int fix_curves,
+hoc_status hoc_opt_setup(hoc_opt *o, hoc_mesh *m, hoc_measure measure, int fix_curves,
                         const unsigned char *free_elements, int free_rings) {
   memset(o, 0, sizeof *o);
   o->m = m;
@@ -529,30 +416,30 @@ static hoc_status setup(opt *o, hoc_mesh *m, hoc_measure measure, int fix_curves
   size_t nn = m->n_nodes, ne = m->n_elems, np = (size_t)o->np;
   HOC_ALLOC(o->ndof, nn);
   HOC_ALLOC(o->ne_local, ne * np + 1);
-  HOC_TRY(csr_alloc(nn, ne * np, &o->ne_start, &o->ne_elem));
+  HOC_TRY(hoc_opt_csr_alloc(nn, ne * np, &o->ne_start, &o->ne_elem));
   for (size_t e = 0; e < ne; ++e)
     for (size_t k = 0; k < np; ++k) o->ne_start[m->conn[e * np + k] + 1]++;
-  csr_finish_counts(nn, o->ne_start);
+  hoc_opt_csr_finish_counts(nn, o->ne_start);
   for (size_t e = 0; e < ne; ++e)
     for (size_t k = 0; k < np; ++k) {
       size_t i = m->conn[e * np + k], pos = o->ne_start[i]++;
       o->ne_elem[pos] = e;
       o->ne_local[pos] = (int)k;
     }
-  csr_restore(nn, o->ne_start);
-  HOC_TRY(csr_alloc(nn, m->n_slots, &o->ns_start, &o->ns_slot));
+  hoc_opt_csr_restore(nn, o->ne_start);
+  HOC_TRY(hoc_opt_csr_alloc(nn, m->n_slots, &o->ns_start, &o->ns_slot));
   for (size_t s = 0; s < m->n_slots; ++s) o->ns_start[m->slot_node[s] + 1]++;
-  csr_finish_counts(nn, o->ns_start);
+  hoc_opt_csr_finish_counts(nn, o->ns_start);
   for (size_t s = 0; s < m->n_slots; ++s) o->ns_slot[o->ns_start[m->slot_node[s]]++] = s;
-  csr_restore(nn, o->ns_start);
+  hoc_opt_csr_restore(nn, o->ns_start);
   size_t lp = (size_t)m->order + 1;
-  HOC_TRY(csr_alloc(nn, m->n_lines * lp, &o->nl_start, &o->nl_line));
+  HOC_TRY(hoc_opt_csr_alloc(nn, m->n_lines * lp, &o->nl_start, &o->nl_line));
   for (size_t l = 0; l < m->n_lines; ++l)
     for (size_t k = 0; k < lp; ++k) o->nl_start[m->line_conn[l * lp + k] + 1]++;
-  csr_finish_counts(nn, o->nl_start);
+  hoc_opt_csr_finish_counts(nn, o->nl_start);
   for (size_t l = 0; l < m->n_lines; ++l)
     for (size_t k = 0; k < lp; ++k) o->nl_line[o->nl_start[m->line_conn[l * lp + k]]++] = l;
-  csr_restore(nn, o->nl_start);
+  hoc_opt_csr_restore(nn, o->nl_start);
   for (size_t i = 0; i < nn; ++i) {
     if (o->ne_start[i + 1] == o->ne_start[i]) continue; /* used by no element */
     if (m->dim[i] == HOC_ON_FACE) o->ndof[i] = 2;
@@ -563,7 +450,7 @@ static hoc_status setup(opt *o, hoc_mesh *m, hoc_measure measure, int fix_curves
   /* the two families at once (each fills only its own blockset) */
   hoc_par_error err = {0};
 #pragma omp parallel for schedule(static, 1) num_threads(2) if (omp_get_max_threads() > 1)
-  for (int family = 0; family < 2; ++family) hoc_par_error_catch(&err, build_blocks(o, family));
+  for (int family = 0; family < 2; ++family) hoc_par_error_catch(&err, hoc_opt_build_blocks(o, family));
   HOC_TRY(hoc_par_error_raise(&err));
   o->B = &o->fam[0]; /* family 0 is current by default */
   o->max_nd = o->fam[0].max_nd > o->fam[1].max_nd ? o->fam[0].max_nd : o->fam[1].max_nd;
@@ -620,7 +507,7 @@ static hoc_status setup(opt *o, hoc_mesh *m, hoc_measure measure, int fix_curves
 }
 
 /* Derivatives dx/dz of every free node and the normals of every slot. */
-static hoc_status eval_all(opt *o) {
+hoc_status hoc_opt_eval_all(hoc_opt *o) {
   hoc_mesh *m = o->m;
   HOC_TRY(hoc_mesh_slot_normals(m, o->normal));
   /* face nodes grouped per face, curve nodes per curve */
@@ -640,13 +527,13 @@ static hoc_status eval_all(opt *o) {
     int g = m->dim[i] == HOC_ON_FACE ? m->entity[i] : nf + m->entity[i];
     start[g + 1]++;
   }
-  csr_finish_counts((size_t)(nf + nc), start);
+  hoc_opt_csr_finish_counts((size_t)(nf + nc), start);
   for (size_t i = 0; i < nn; ++i) {
     if (!o->ndof[i]) continue;
     int g = m->dim[i] == HOC_ON_FACE ? m->entity[i] : nf + m->entity[i];
     order[start[g]++] = i;
   }
-  csr_restore((size_t)(nf + nc), start);
+  hoc_opt_csr_restore((size_t)(nf + nc), start);
   size_t *piece = NULL, n_pieces = 0;
   HOC_TRY_GOTO(hoc_split_groups(start, nf + nc, 1024, &piece, &n_pieces), done);
   hoc_par_error err = {0};
@@ -689,7 +576,7 @@ done:
 
 /* Positions and normals of element e's nodes: the trial state of nodes
  * flagged `moving`, else the current one. */
-static void gather(const opt *o, size_t e, double *x, double *n) {
+void hoc_opt_gather(const hoc_opt *o, size_t e, double *x, double *n) {
   const hoc_mesh *m = o->m;
   size_t np = (size_t)o->np;
   const size_t *cn = m->conn + e * np, *sl = m->elem_slot + e * np;
@@ -700,17 +587,15 @@ static void gather(const opt *o, size_t e, double *x, double *n) {
   }
 }
 
-static void trial_elem_uv(const opt *o, size_t k, size_t e, int kk, double *uv);
-
 /* Element not folded in the (u,v) plane: orient * det(D u(xi)) > 0 at its
  * nodes (trial state of `moving` nodes). uv: [np][2] scratch. */
-static int param_valid(const opt *o, size_t e, double *uv) {
+int hoc_opt_param_valid(const hoc_opt *o, size_t e, double *uv) {
   const hoc_mesh *m = o->m;
   int np = o->np;
   const size_t *cn = m->conn + e * (size_t)np;
   memcpy(uv, m->elem_uv + 2 * e * (size_t)np, 2 * (size_t)np * sizeof *uv);
   for (int i = 0; i < np; ++i)
-    if (o->moving[cn[i]]) trial_elem_uv(o, cn[i], e, i, uv + 2 * i);
+    if (o->moving[cn[i]]) hoc_opt_trial_elem_uv(o, cn[i], e, i, uv + 2 * i);
   double sign = m->face_orient[m->elem_face[e]] < 0 ? -1.0 : 1.0;
   for (int j = 0; j < np; ++j) {
     const double *g = o->t->Gn + 2 * (size_t)j * np;
@@ -727,7 +612,7 @@ static int param_valid(const opt *o, size_t e, double *uv) {
 }
 
 /* Smallest sigma and the size scale mean(|D phi|^2 / 2) of an element. */
-static void sigma_stats(const opt *o, const double *x, const double *n, double *smin,
+static void sigma_stats(const hoc_opt *o, const double *x, const double *n, double *smin,
                         double *scale) {
   const hoc_quality_tables *t = o->t;
   int np = t->np;
@@ -746,7 +631,7 @@ static void sigma_stats(const opt *o, const double *x, const double *n, double *
     } else {
       memcpy(nq, n + 3 * (q - t->nq), sizeof nq);
     }
-    cross(a1, a2, c);
+    hoc_opt_cross(a1, a2, c);
     double cl = sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
     double sig = c[0] * nq[0] + c[1] * nq[1] + c[2] * nq[2] > 0 ? cl : -cl;
     mn = fmin(mn, sig);
@@ -764,7 +649,7 @@ static void sigma_stats(const opt *o, const double *x, const double *n, double *
  * folded, the point where they found it. r: [nq + np + nv + 1],
  * J: [nq + np + nv + 1][np][3] or NULL. Returns the count and sets
  * *smin to the smallest sigma / |D phi|^2 over the quadrature points. */
-static int elem_residuals(const opt *o, size_t e, const double *x, const double *n,
+int hoc_opt_elem_residuals(const hoc_opt *o, size_t e, const double *x, const double *n,
                           const unsigned char *need, double *r, double *J, double *smin) {
   int nq = o->nq, np = o->np;
   double s = hoc_element_residuals(o->t, o->measure, x, n, o->delta[e], need, r, J);
@@ -781,13 +666,9 @@ static int elem_residuals(const opt *o, size_t e, const double *x, const double 
   return count + 1;
 }
 
-/* Element e may not fold between the samples (its steps run the exact
- * tests): every element of a protected run, the fragile ones of any run. */
-static int guarded(const opt *o, size_t e) { return o->protect || o->fragile[e]; }
-
 /* Per-element state at the start of a sweep: validity, parametric
  * validity, regularisation; also f, q and the tangled count. */
-static hoc_status sweep_start(opt *o, double *objective, double *min_q, size_t *tangled) {
+hoc_status hoc_opt_sweep_start(hoc_opt *o, double *objective, double *min_q, size_t *tangled) {
   hoc_mesh *m = o->m;
   size_t ne = m->n_elems;
   int np = o->np, nq = o->nq;
@@ -805,12 +686,12 @@ static hoc_status sweep_start(opt *o, double *objective, double *min_q, size_t *
 #pragma omp for schedule(static)
     for (size_t e = 0; e < ne; ++e) {
       if (!x || !o->dirty[e]) continue;
-      gather(o, e, x, n);
+      hoc_opt_gather(o, e, x, n);
       double eta;
       qe[e] = hoc_element_quality_test(o->t, o->measure, x, n, o->exact, &eta, NULL);
       o->valid[e] = qe[e] > 0;
-      o->xvalid[e] = o->valid[e] && (o->exact || !guarded(o, e) || !hoc_element_folded(o->t, x, n));
-      o->pvalid[e] = (unsigned char)param_valid(o, e, uv);
+      o->xvalid[e] = o->valid[e] && (o->exact || !hoc_opt_guarded(o, e) || !hoc_element_folded(o->t, x, n));
+      o->pvalid[e] = (unsigned char)hoc_opt_param_valid(o, e, uv);
       o->delta_own[e] = 0;
       /* a fold the samples miss: a residual where the exact tests found it
        * (the samples' residuals cannot see it, and no step would open it) */
@@ -856,9 +737,9 @@ static hoc_status sweep_start(opt *o, double *objective, double *min_q, size_t *
 #pragma omp for schedule(static)
     for (size_t e = 0; e < ne; ++e) {
       if (!x || !(o->dirty[e] || o->region[e] || o->was_region[e])) continue;
-      gather(o, e, x, n);
+      hoc_opt_gather(o, e, x, n);
       double f = 0;
-      int nr = elem_residuals(o, e, x, n, NULL, r, NULL, NULL);
+      int nr = hoc_opt_elem_residuals(o, e, x, n, NULL, r, NULL, NULL);
       for (int q = 0; q < nr; ++q) f += r[q] * r[q];
       fe[e] = f;
     }
@@ -881,7 +762,7 @@ static hoc_status sweep_start(opt *o, double *objective, double *min_q, size_t *
 
 /* Parameters of node k's slot s for the trial: (u,v) of the slot, unwrapped
  * near the element's current value. */
-static void trial_elem_uv(const opt *o, size_t k, size_t e, int kk, double *uv) {
+void hoc_opt_trial_elem_uv(const hoc_opt *o, size_t k, size_t e, int kk, double *uv) {
   const hoc_mesh *m = o->m;
   const double *cur = m->elem_uv + 2 * (e * (size_t)o->np + (size_t)kk);
   if (m->dim[k] == HOC_ON_FACE) {
@@ -898,7 +779,7 @@ static void trial_elem_uv(const opt *o, size_t k, size_t e, int kk, double *uv) 
 
 /* CAD evaluation of node i's trial parameters: position, derivatives, and
  * the parameters and normals of its slots. */
-static hoc_status eval_trial(opt *o, size_t i) {
+hoc_status hoc_opt_eval_trial(hoc_opt *o, size_t i) {
   hoc_mesh *m = o->m;
   const hoc_model *model = o->model;
   int ent = m->entity[i];
@@ -938,16 +819,16 @@ static hoc_status eval_trial(opt *o, size_t i) {
 
 /* CAD evaluation of the trial parameters of the nodes in list[0..n) (no
  * node twice), on nthreads threads. */
-static hoc_status eval_trials(opt *o, const size_t *list, size_t n, int nthreads) {
+hoc_status hoc_opt_eval_trials(hoc_opt *o, const size_t *list, size_t n, int nthreads) {
   hoc_par_error err = {0};
 #pragma omp parallel for schedule(dynamic, 4) num_threads(nthreads) if (n > 8 && o->model->thread_safe)
   for (size_t c = 0; c < n; ++c)
-    hoc_par_error_catch(&err, eval_trial(o, list[c]));
+    hoc_par_error_catch(&err, hoc_opt_eval_trial(o, list[c]));
   return hoc_par_error_raise(&err);
 }
 
 /* Accept node k's trial. */
-static void commit(opt *o, size_t k) {
+void hoc_opt_commit(hoc_opt *o, size_t k) {
   hoc_mesh *m = o->m;
   int np = o->np;
   for (size_t a = o->ne_start[k]; a < o->ne_start[k + 1]; ++a) o->dirty[o->ne_elem[a]] = 1;
@@ -955,7 +836,7 @@ static void commit(opt *o, size_t k) {
     size_t e = o->ne_elem[a];
     int kk = o->ne_local[a];
     double uv[2];
-    trial_elem_uv(o, k, e, kk, uv);
+    hoc_opt_trial_elem_uv(o, k, e, kk, uv);
     memcpy(m->elem_uv + 2 * (e * (size_t)np + (size_t)kk), uv, sizeof uv);
   }
   if (m->dim[k] == HOC_ON_CURVE) {
@@ -994,13 +875,13 @@ static void commit(opt *o, size_t k) {
 
 /* Blocks ------------------------------------------------------------------- */
 
-static double carry_weight(const opt *o, size_t b, size_t node) {
+double hoc_opt_carry_weight(const hoc_opt *o, size_t b, size_t node) {
   for (size_t j = o->B->carry_start[b]; j < o->B->carry_start[b + 1]; ++j)
     if (o->B->carry_node[j] == node) return o->B->carry_w[j];
   return 0;
 }
 
-static void set_moving(opt *o, size_t b, unsigned char v) {
+void hoc_opt_set_moving(hoc_opt *o, size_t b, unsigned char v) {
   for (size_t a = o->B->bn_start[b]; a < o->B->bn_start[b + 1]; ++a) o->moving[o->B->bn_node[a]] = v;
   for (size_t j = o->B->carry_start[b]; j < o->B->carry_start[b + 1]; ++j) o->moving[o->B->carry_node[j]] = v;
 }
@@ -1011,7 +892,7 @@ static void set_moving(opt *o, size_t b, unsigned char v) {
  * (and not near a tangle) start asleep. Element contributions are stored
  * and summed per node in element order, so the result does not depend on
  * the thread count. */
-static hoc_status screen(opt *o) {
+hoc_status hoc_opt_screen(hoc_opt *o) {
   hoc_mesh *m = o->m;
   size_t ne = m->n_elems, np = (size_t)o->np;
   /* [ne][np][g0 g1 h00 h01 h11], every entry written below (not zeroed) */
@@ -1036,8 +917,8 @@ static hoc_status screen(opt *o) {
       if (!need || (o->touched && !o->touched[e])) continue; /* (no free node reads it) */
       const size_t *cn = m->conn + e * np;
       for (size_t i = 0; i < np; ++i) need[i] = o->ndof[cn[i]] > 0;
-      gather(o, e, x, n);
-      int nr = elem_residuals(o, e, x, n, need, r, J, NULL);
+      hoc_opt_gather(o, e, x, n);
+      int nr = hoc_opt_elem_residuals(o, e, x, n, need, r, J, NULL);
       for (size_t i = 0; i < np; ++i) {
         const double *dz = o->dz + 6 * cn[i];
         double c[5] = {0, 0, 0, 0, 0};
@@ -1091,7 +972,7 @@ static hoc_status screen(opt *o) {
 
 /* Local objective of block b at the current state: f, gradient g[nd] and
  * Gauss-Newton matrix H[nd][nd] in its unknowns. */
-static void block_model(const opt *o, size_t b, scratch *s, double *f, double *g, double *H) {
+void hoc_opt_block_model(const hoc_opt *o, size_t b, hoc_opt_scratch *s, double *f, double *g, double *H) {
   const hoc_mesh *m = o->m;
   int np = o->np, nd = (int)(o->B->bd_start[b + 1] - o->B->bd_start[b]);
   int carries = o->B->carry_start[b + 1] > o->B->carry_start[b];
@@ -1108,15 +989,15 @@ static void block_model(const opt *o, size_t b, scratch *s, double *f, double *g
       if (o->B->node_block[node] == b) {
         s->off[i] = o->B->node_off[node];
         s->nd[i] = o->ndof[node];
-      } else if (carries && (s->w[i] = carry_weight(o, b, node)) > 0) {
+      } else if (carries && (s->w[i] = hoc_opt_carry_weight(o, b, node)) > 0) {
         s->off[i] = 0;
         s->nd[i] = 2;
       } else {
         s->nd[i] = 0;
       }
     }
-    gather(o, e, s->x, s->n);
-    int nr = elem_residuals(o, e, s->x, s->n, s->nd, s->r, s->J, NULL);
+    hoc_opt_gather(o, e, s->x, s->n);
+    int nr = hoc_opt_elem_residuals(o, e, s->x, s->n, s->nd, s->r, s->J, NULL);
     double *Jz = s->Jz; /* [nr][nd] */
     memset(Jz, 0, (size_t)nr * (size_t)nd * sizeof *Jz);
     for (int i = 0; i < np; ++i) {
@@ -1187,7 +1068,7 @@ static int damped_solve(int nd, const double *H, const double *g, double *L, dou
 /* Curve parameters of line l's nodes in order along the line (trial values
  * for moving nodes), unwrapped from its first end: 1 if strictly monotone in
  * the line's direction. */
-static int line_monotone(const opt *o, size_t l) {
+int hoc_opt_line_monotone(const hoc_opt *o, size_t l) {
   const hoc_mesh *m = o->m;
   int p = m->order;
   const size_t *ln = m->line_conn + l * (size_t)(p + 1);
@@ -1239,7 +1120,7 @@ static int line_monotone(const opt *o, size_t l) {
  * one fold left there opens only so, 0 tangled, min q 0.258; never relaxed
  * it stays, and the split after leaves min q 0.195 against a bound of
  * 0.209). */
-static int relaxed(const opt *o, size_t e) {
+static int relaxed(const hoc_opt *o, size_t e) {
   return o->region[e] && o->eps > 2e-3 && !o->fragile[e] &&
          (o->m->order <= PROTECT_MAX_ORDER || o->exact);
 }
@@ -1250,7 +1131,7 @@ static int relaxed(const opt *o, size_t e) {
  * rule lets go. Not on faces with a pole, where (u, v) folds without the
  * surface folding. Only in a second attempt: from the start it can trade one
  * fold for several (t20 at order 10 ends with 12 instead of 0). */
-static int relaxed_uv(const opt *o, size_t e) {
+static int relaxed_uv(const hoc_opt *o, size_t e) {
   if (!o->relax_uv || !relaxed(o, e)) return 0;
   const hoc_cad_face *f = &o->model->faces[o->m->elem_face[e]];
   return !(f->pole[0] || f->pole[1] || f->pole[2] || f->pole[3]);
@@ -1258,22 +1139,22 @@ static int relaxed_uv(const opt *o, size_t e) {
 
 /* Local objective of block b at its trial (nodes flagged moving); 0 if the
  * trial breaks a rule. */
-static int block_trial_flagged(const opt *o, size_t b, scratch *s, double fmax, double *f) {
+static int block_trial_flagged(const hoc_opt *o, size_t b, hoc_opt_scratch *s, double fmax, double *f) {
   const hoc_mesh *m = o->m;
   *f = 0;
   for (size_t a = o->B->bn_start[b]; a < o->B->bn_start[b + 1]; ++a) {
     size_t k = o->B->bn_node[a];
     if (m->dim[k] != HOC_ON_CURVE) continue;
     for (size_t c = o->nl_start[k]; c < o->nl_start[k + 1]; ++c)
-      if (!line_monotone(o, o->nl_line[c])) return 0;
+      if (!hoc_opt_line_monotone(o, o->nl_line[c])) return 0;
   }
   for (size_t a = o->B->be_start[b]; a < o->B->be_start[b + 1]; ++a) {
     size_t e = o->B->be_elem[a];
-    gather(o, e, s->x, s->n);
-    if (o->pvalid[e] && o->on_boundary[e] && !relaxed_uv(o, e) && !param_valid(o, e, s->uv))
+    hoc_opt_gather(o, e, s->x, s->n);
+    if (o->pvalid[e] && o->on_boundary[e] && !relaxed_uv(o, e) && !hoc_opt_param_valid(o, e, s->uv))
       return 0;
     double smin;
-    int nr = elem_residuals(o, e, s->x, s->n, NULL, s->r, NULL, &smin);
+    int nr = hoc_opt_elem_residuals(o, e, s->x, s->n, NULL, s->r, NULL, &smin);
     if (o->valid[e] && !relaxed(o, e) && !(smin > 0)) return 0;
     for (int q = 0; q < nr; ++q) *f += s->r[q] * s->r[q];
   }
@@ -1283,17 +1164,17 @@ static int block_trial_flagged(const opt *o, size_t b, scratch *s, double fmax, 
   for (size_t a = o->B->be_start[b]; a < o->B->be_start[b + 1]; ++a) {
     size_t e = o->B->be_elem[a];
     if (!o->valid[e] || relaxed(o, e)) continue;
-    gather(o, e, s->x, s->n);
-    if (hoc_element_nodes_tangled(o->t, s->x, s->n, o->exact || (guarded(o, e) && o->xvalid[e])))
+    hoc_opt_gather(o, e, s->x, s->n);
+    if (hoc_element_nodes_tangled(o->t, s->x, s->n, o->exact || (hoc_opt_guarded(o, e) && o->xvalid[e])))
       return 0;
   }
   return 1;
 }
 
-static int block_trial(opt *o, size_t b, scratch *s, double fmax, double *f) {
-  set_moving(o, b, 1);
+static int block_trial(hoc_opt *o, size_t b, hoc_opt_scratch *s, double fmax, double *f) {
+  hoc_opt_set_moving(o, b, 1);
   int ok = block_trial_flagged(o, b, s, fmax, f);
-  set_moving(o, b, 0);
+  hoc_opt_set_moving(o, b, 0);
   return ok;
 }
 
@@ -1308,7 +1189,7 @@ static int param_ok(double cur, double v, double lo, double hi) {
 
 /* Trial parameters of block b at step length alpha[b]: the block's nodes
  * and the nodes it carries. Returns 0 if one leaves a non-closed range. */
-static int set_trial_params(opt *o, size_t b) {
+int hoc_opt_set_trial_params(hoc_opt *o, size_t b) {
   const hoc_mesh *m = o->m;
   const double *st = o->step + o->B->bd_start[b];
   double al = o->alpha[b];
@@ -1344,13 +1225,13 @@ static int set_trial_params(opt *o, size_t b) {
 }
 
 /* Block b touches a tangled element or one next to it. */
-static int near_tangled(const opt *o, size_t b) {
+static int near_tangled(const hoc_opt *o, size_t b) {
   for (size_t a = o->B->be_start[b]; a < o->B->be_start[b + 1]; ++a)
     if (o->region[o->B->be_elem[a]] || !o->valid[o->B->be_elem[a]]) return 1;
   return 0;
 }
 
-static int block_active(const opt *o, size_t b) {
+static int block_active(const hoc_opt *o, size_t b) {
   int act = 0, near = !o->local;
   for (size_t a = o->B->bn_start[b]; a < o->B->bn_start[b + 1]; ++a) {
     act |= o->active[o->B->bn_node[a]];
@@ -1361,10 +1242,10 @@ static int block_active(const opt *o, size_t b) {
 
 /* Node k is active again: its blocks of both families go on their colours'
  * queues. */
-static void wake_node(opt *o, size_t k) {
+void hoc_opt_wake_node(hoc_opt *o, size_t k) {
   o->active[k] = 1;
   for (int f = 0; f < 2; ++f) {
-    blockset *B = &o->fam[f];
+    hoc_opt_blockset *B = &o->fam[f];
     size_t b = B->node_block[k];
     if (b == SIZE_MAX || B->queued[b]) continue;
     B->queued[b] = 1;
@@ -1381,13 +1262,13 @@ static void wake_node(opt *o, size_t k) {
  * testing its elements exactly. */
 #define NEAR_RINGS 3
 
-static void mark_near(opt *o) {
+void hoc_opt_mark_near(hoc_opt *o) {
   for (size_t e = 0; e < o->m->n_elems; ++e) o->near_e[e] = !o->valid[e];
-  grow_rings(o->m, o->near_e, o->near, NEAR_RINGS);
+  hoc_opt_grow_rings(o->m, o->near_e, o->near, NEAR_RINGS);
 }
 
 /* Every block may be active (after a change of every node's flag). */
-static void wake_all(opt *o) {
+void hoc_opt_wake_all(hoc_opt *o) {
   for (int f = 0; f < 2; ++f)
     memset(o->fam[f].scan_all, 1, (size_t)o->fam[f].n_colors);
 }
@@ -1395,8 +1276,8 @@ static void wake_all(opt *o) {
 /* The blocks of a colour with an active node into o->list (in an order that
  * does not matter: blocks of one colour share no element); returns their
  * number. Empties the colour's queue. */
-static size_t select_active(opt *o, int color) {
-  blockset *B = o->B;
+size_t hoc_opt_select_active(hoc_opt *o, int color) {
+  hoc_opt_blockset *B = o->B;
   size_t n = 0;
   for (size_t b = B->queue_head[color], next; b != SIZE_MAX; b = next) {
     next = B->queue_next[b];
@@ -1414,20 +1295,20 @@ static size_t select_active(opt *o, int color) {
 
 /* One colour: a Gauss-Newton step per active block, then a common
  * backtracking line search. *moved counts the nodes moved. */
-static hoc_status do_color(opt *o, int color, scratch *scr, int nthreads, size_t *moved) {
+hoc_status hoc_opt_do_color(hoc_opt *o, int color, hoc_opt_scratch *scr, int nthreads, size_t *moved) {
   hoc_mesh *m = o->m;
-  size_t n = select_active(o, color);
+  size_t n = hoc_opt_select_active(o, color);
   *moved = 0;
   if (!n) return HOC_OK;
   size_t *list = o->list;
 #pragma omp parallel for schedule(dynamic, 8) num_threads(nthreads)
   for (size_t a = 0; a < n; ++a) {
     size_t b = list[a];
-    scratch *s = &scr[omp_get_thread_num()];
+    hoc_opt_scratch *s = &scr[omp_get_thread_num()];
     for (size_t c = o->B->bn_start[b]; c < o->B->bn_start[b + 1]; ++c) o->active[o->B->bn_node[c]] = 0;
     int nd = (int)(o->B->bd_start[b + 1] - o->B->bd_start[b]);
     double f;
-    block_model(o, b, s, &f, s->g, s->H);
+    hoc_opt_block_model(o, b, s, &f, s->g, s->H);
     o->f0[b] = f;
     o->state[b] = 0;
     double *st = o->step + o->B->bd_start[b];
@@ -1465,20 +1346,20 @@ static hoc_status do_color(opt *o, int color, scratch *scr, int nthreads, size_t
     size_t ne_list = 0;
     for (size_t a = 0; a < nt; ++a) {
       size_t b = list[a];
-      for (int tries = 0; tries < 40 && !set_trial_params(o, b); ++tries) o->alpha[b] *= 0.5;
+      for (int tries = 0; tries < 40 && !hoc_opt_set_trial_params(o, b); ++tries) o->alpha[b] *= 0.5;
       for (size_t c = o->B->bn_start[b]; c < o->B->bn_start[b + 1]; ++c) elist[ne_list++] = o->B->bn_node[c];
       for (size_t j = o->B->carry_start[b]; j < o->B->carry_start[b + 1]; ++j) elist[ne_list++] = o->B->carry_node[j];
     }
-    HOC_TRY_GOTO(eval_trials(o, elist, ne_list, nthreads), done);
+    HOC_TRY_GOTO(hoc_opt_eval_trials(o, elist, ne_list, nthreads), done);
 #pragma omp parallel for schedule(dynamic, 8) num_threads(nthreads)
     for (size_t a = 0; a < nt; ++a) {
       size_t b = list[a];
-      scratch *s = &scr[omp_get_thread_num()];
+      hoc_opt_scratch *s = &scr[omp_get_thread_num()];
       double f;
       int ok = block_trial(o, b, s, o->f0[b] + 1e-4 * o->alpha[b] * o->slope[b], &f);
       if (ok) {
-        for (size_t c = o->B->bn_start[b]; c < o->B->bn_start[b + 1]; ++c) commit(o, o->B->bn_node[c]);
-        for (size_t j = o->B->carry_start[b]; j < o->B->carry_start[b + 1]; ++j) commit(o, o->B->carry_node[j]);
+        for (size_t c = o->B->bn_start[b]; c < o->B->bn_start[b + 1]; ++c) hoc_opt_commit(o, o->B->bn_node[c]);
+        for (size_t j = o->B->carry_start[b]; j < o->B->carry_start[b + 1]; ++j) hoc_opt_commit(o, o->B->carry_node[j]);
         o->fnew[b] = f;
         o->state[b] = 2;
       } else {
@@ -1504,7 +1385,7 @@ static hoc_status do_color(opt *o, int color, scratch *scr, int nthreads, size_t
       for (size_t c = o->B->be_start[b]; c < o->B->be_start[b + 1]; ++c) {
         const size_t *cn = m->conn + o->B->be_elem[c] * (size_t)o->np;
         for (int i = 0; i < o->np; ++i)
-          wake_node(o, cn[i]);
+          hoc_opt_wake_node(o, cn[i]);
       }
     }
     nt = keep;
@@ -1514,16 +1395,16 @@ static hoc_status do_color(opt *o, int color, scratch *scr, int nthreads, size_t
 #pragma omp parallel for schedule(dynamic, 8) num_threads(nthreads)
   for (size_t a = 0; a < n_committed; ++a) {
     size_t b = o->committed[a];
-    scratch *s = &scr[omp_get_thread_num()];
+    hoc_opt_scratch *s = &scr[omp_get_thread_num()];
     for (size_t c = o->B->be_start[b]; c < o->B->be_start[b + 1]; ++c) {
       size_t e = o->B->be_elem[c];
       if (!o->valid[e] || !o->xvalid[e]) {
-        gather(o, e, s->x, s->n);
+        hoc_opt_gather(o, e, s->x, s->n);
         if (!o->valid[e]) o->valid[e] = (unsigned char)!hoc_element_tangled(o->t, s->x, s->n, o->exact);
         o->xvalid[e] =
-            o->valid[e] && (o->exact || !guarded(o, e) || !hoc_element_folded(o->t, s->x, s->n));
+            o->valid[e] && (o->exact || !hoc_opt_guarded(o, e) || !hoc_element_folded(o->t, s->x, s->n));
       }
-      if (!o->pvalid[e]) o->pvalid[e] = (unsigned char)param_valid(o, e, s->uv);
+      if (!o->pvalid[e]) o->pvalid[e] = (unsigned char)hoc_opt_param_valid(o, e, s->uv);
     }
   }
 done:
@@ -1531,8 +1412,8 @@ done:
   return status;
 }
 
-static hoc_status scratch_alloc(const opt *o, int nthreads, scratch **out) {
-  scratch *s = hoc_calloc((size_t)nthreads, sizeof *s);
+hoc_status hoc_opt_scratch_alloc(const hoc_opt *o, int nthreads, hoc_opt_scratch **out) {
+  hoc_opt_scratch *s = hoc_calloc((size_t)nthreads, sizeof *s);
   HOC_CHECK(s, HOC_ERR_MEMORY, "out of memory");
   size_t np = (size_t)o->np, nq = (size_t)o->nq, nd = (size_t)(o->max_nd ? o->max_nd : 1);
   int failed = 0;
@@ -1559,7 +1440,7 @@ static hoc_status scratch_alloc(const opt *o, int nthreads, scratch **out) {
   return HOC_OK;
 }
 
-static void scratch_free(scratch *s, int nthreads) {
+void hoc_opt_scratch_free(hoc_opt_scratch *s, int nthreads) {
   if (!s) return;
   for (int i = 0; i < nthreads; ++i) {
     free(s[i].x);
@@ -1578,18 +1459,7 @@ static void scratch_free(scratch *s, int nthreads) {
   free(s);
 }
 
-/* The mesh state the optimiser changes (node parameters and positions, slot
- * and element parameters, line ends), kept while untangling so that a run
- * that ends with more tangled elements than it once had returns the best
- * state reached: a raised regularisation lets valid neighbours of a fold
- * pass through sigma = 0, which does not always pay off. */
-typedef struct snapshot {
-  double *param, *xyz, *slot_uv, *elem_uv, *line_t;
-  size_t tangled; /* SIZE_MAX: none taken */
-  double objective;
-} snapshot;
-
-static void snapshot_free(snapshot *s) {
+void hoc_opt_snapshot_free(hoc_opt_snapshot *s) {
   free(s->param);
   free(s->xyz);
   free(s->slot_uv);
@@ -1605,7 +1475,7 @@ static hoc_status keep(double **dst, const double *src, size_t n) {
   return HOC_OK;
 }
 
-static hoc_status snapshot_take(snapshot *s, const hoc_mesh *m, size_t tangled, double f) {
+hoc_status hoc_opt_snapshot_take(hoc_opt_snapshot *s, const hoc_mesh *m, size_t tangled, double f) {
   HOC_TRY(keep(&s->param, m->param, 2 * m->n_nodes));
   HOC_TRY(keep(&s->xyz, m->xyz, 3 * m->n_nodes));
   HOC_TRY(keep(&s->slot_uv, m->slot_uv, 2 * m->n_slots));
@@ -1616,7 +1486,7 @@ static hoc_status snapshot_take(snapshot *s, const hoc_mesh *m, size_t tangled, 
   return HOC_OK;
 }
 
-static void snapshot_restore(const snapshot *s, hoc_mesh *m) {
+void hoc_opt_snapshot_restore(const hoc_opt_snapshot *s, hoc_mesh *m) {
   memcpy(m->param, s->param, 2 * m->n_nodes * sizeof *s->param);
   memcpy(m->xyz, s->xyz, 3 * m->n_nodes * sizeof *s->xyz);
   memcpy(m->slot_uv, s->slot_uv, 2 * m->n_slots * sizeof *s->slot_uv);
@@ -1647,8 +1517,8 @@ static void snapshot_restore(const snapshot *s, hoc_mesh *m) {
  * (Not sigma / |D phi|^2, which a node moved far away shrinks towards 0:
  * on gmsh 4.8's bottle the search took an interior node 0.4 out of its
  * element of width 0.01 that way.) */
-static double polish_margin(const opt *o, size_t e, double *x, double *n) {
-  gather(o, e, x, n);
+static double polish_margin(const hoc_opt *o, size_t e, double *x, double *n) {
+  hoc_opt_gather(o, e, x, n);
   double eta, ms = 0;
   double q = hoc_element_quality_test(o->t, o->measure, x, n, 1, &eta, &ms);
   if (q > 0) return ms > 0 ? ms : DBL_MIN;
@@ -1657,7 +1527,7 @@ static double polish_margin(const opt *o, size_t e, double *x, double *n) {
 }
 
 /* Tangled count and the sum of negative margins of elements el[0..n). */
-static void polish_score(const opt *o, const size_t *el, size_t n, double *margin, double *x,
+static void polish_score(const hoc_opt *o, const size_t *el, size_t n, double *margin, double *x,
                          double *nrm, size_t *count, double *neg) {
   *count = 0;
   *neg = 0;
@@ -1671,11 +1541,11 @@ static void polish_score(const opt *o, const size_t *el, size_t n, double *margi
 }
 
 /* One patch: the free nodes of the elements sharing a corner with e0. */
-static hoc_status polish_patch(opt *o, size_t e0, unsigned char *mark) {
+static hoc_status polish_patch(hoc_opt *o, size_t e0, unsigned char *mark) {
   hoc_mesh *m = o->m;
   int np = o->np;
   hoc_status status = HOC_OK;
-  growlist gn = {0}, ge = {0};
+  hoc_growlist gn = {0}, ge = {0};
   double *margin = NULL, *trial = NULL, *x = NULL, *nrm = NULL, *uv = NULL;
   unsigned char *pv = NULL;
   /* the patch's nodes, then every element using one of them (in order) */
@@ -1687,7 +1557,7 @@ static hoc_status polish_patch(opt *o, size_t e0, unsigned char *mark) {
         size_t k = m->conn[e * (size_t)np + (size_t)i];
         if (!o->ndof[k] || o->moving[k]) continue;
         o->moving[k] = 1; /* (as a mark while collecting) */
-        status = grow_push(&gn, k);
+        status = hoc_grow_push(&gn, k);
       }
     }
   }
@@ -1696,7 +1566,7 @@ static hoc_status polish_patch(opt *o, size_t e0, unsigned char *mark) {
       size_t e = o->ne_elem[b];
       if (mark[e]) continue;
       mark[e] = 1;
-      status = grow_push(&ge, e);
+      status = hoc_grow_push(&ge, e);
     }
   for (size_t a = 0; a < gn.n; ++a)
     o->moving[gn.v[a]] = 0;
@@ -1718,7 +1588,7 @@ static hoc_status polish_patch(opt *o, size_t e0, unsigned char *mark) {
   double neg;
   polish_score(o, el, nel, margin, x, nrm, &count, &neg);
   for (size_t a = 0; a < nel; ++a)
-    pv[a] = (unsigned char)param_valid(o, el[a], uv);
+    pv[a] = (unsigned char)hoc_opt_param_valid(o, el[a], uv);
   size_t measures = nel;
   /* steps: a share of the node's local length, halved when no move helps */
   for (double share = 0.25; share > 1.0 / 4096 && count && measures < POLISH_MAX_MEASURES;) {
@@ -1739,12 +1609,12 @@ static hoc_status polish_patch(opt *o, size_t e0, unsigned char *mark) {
           const hoc_cad_curve *c = &o->model->curves[m->entity[k]];
           if (!(c->period > 0) && (o->tpar[2 * k] < c->lo || o->tpar[2 * k] > c->hi)) continue;
         }
-        status = eval_trial(o, k);
+        status = hoc_opt_eval_trial(o, k);
         if (status != HOC_OK) goto done;
         o->moving[k] = 1;
         int ok = 1;
         for (size_t b = o->nl_start[k]; b < o->nl_start[k + 1] && ok; ++b)
-          ok = line_monotone(o, o->nl_line[b]);
+          ok = hoc_opt_line_monotone(o, o->nl_line[b]);
         size_t tc = 0;
         double tneg = 0;
         for (size_t b = 0; b < nel && ok; ++b) {
@@ -1759,11 +1629,11 @@ static hoc_status polish_patch(opt *o, size_t e0, unsigned char *mark) {
             tc++;
             tneg += trial[b];
           }
-          if (ok && touches && pv[b]) ok = param_valid(o, el[b], uv);
+          if (ok && touches && pv[b]) ok = hoc_opt_param_valid(o, el[b], uv);
         }
         ok = ok && (tc < count || (tc == count && tneg > neg + 1e-12 * fabs(neg)));
         if (ok) {
-          commit(o, k);
+          hoc_opt_commit(o, k);
           memcpy(margin, trial, nel * sizeof *margin);
           count = tc;
           neg = tneg;
@@ -1787,8 +1657,8 @@ done:
 
 /* The polish of every element still tangled by the exact test (at most
  * POLISH_MAX_TANGLED of them), in element order; the caller counts what it
- * untangled at its next sweep_start. */
-static hoc_status polish(opt *o) {
+ * untangled at its next hoc_opt_sweep_start. */
+hoc_status hoc_opt_polish(hoc_opt *o) {
   hoc_mesh *m = o->m;
   size_t tangled = 0;
   for (size_t e = 0; e < m->n_elems; ++e)
@@ -1808,7 +1678,7 @@ static hoc_status polish(opt *o) {
   }
   free(x);
   free(mark);
-  /* every element again at the next sweep_start */
+  /* every element again at the next hoc_opt_sweep_start */
   memset(o->dirty, 1, m->n_elems);
   return status;
 }
@@ -1816,18 +1686,18 @@ static hoc_status polish(opt *o) {
 hoc_status hoc_mesh_polish(hoc_mesh *mesh, hoc_measure measure, int fix_curves, size_t *untangled) {
   HOC_CHECK(mesh && untangled, HOC_ERR_ARGUMENT, "NULL argument");
   *untangled = 0;
-  opt ctx = {0};
+  hoc_opt ctx = {0};
   double f, qmin;
   size_t before = 0, after = 0;
   hoc_status status = hoc_mesh_update_xyz(mesh);
-  if (status == HOC_OK) status = setup(&ctx, mesh, measure, fix_curves, NULL, 0);
-  if (status == HOC_OK) status = eval_all(&ctx);
+  if (status == HOC_OK) status = hoc_opt_setup(&ctx, mesh, measure, fix_curves, NULL, 0);
+  if (status == HOC_OK) status = hoc_opt_eval_all(&ctx);
   ctx.exact = 1;
-  if (status == HOC_OK) status = sweep_start(&ctx, &f, &qmin, &before);
-  if (status == HOC_OK) status = polish(&ctx);
-  if (status == HOC_OK) status = sweep_start(&ctx, &f, &qmin, &after);
+  if (status == HOC_OK) status = hoc_opt_sweep_start(&ctx, &f, &qmin, &before);
+  if (status == HOC_OK) status = hoc_opt_polish(&ctx);
+  if (status == HOC_OK) status = hoc_opt_sweep_start(&ctx, &f, &qmin, &after);
   if (status == HOC_OK) *untangled = before > after ? before - after : 0;
-  opt_free(&ctx);
+  hoc_opt_free(&ctx);
   return status;
 }
 
@@ -1846,7 +1716,7 @@ hoc_status hoc_mesh_polish(hoc_mesh *mesh, hoc_measure measure, int fix_curves, 
  * bottle, 8 of 7 818 on the aircraft), so their exact tests cost little.
  * Never relaxed either (relaxed). Sets o->fragile from qe; returns how
  * many. */
-static size_t mark_fragile(opt *o) {
+static size_t mark_fragile(hoc_opt *o) {
   const hoc_mesh *m = o->m;
   size_t n = 0;
   if (m->order <= PROTECT_MAX_ORDER || o->touched) return 0;
@@ -1860,7 +1730,7 @@ static size_t mark_fragile(opt *o) {
 /* One run of the optimiser from the mesh as it is (see hoc_mesh_optimize);
  * its sweeps are numbered from it0 + 1, its seconds from t0; *limited:
  * its first phase used all its sweeps with elements still tangled. */
-static hoc_status optimize_run(hoc_mesh *mesh, const hoc_optimize_options *options, int protect,
+hoc_status hoc_opt_run(hoc_mesh *mesh, const hoc_optimize_options *options, int protect,
                                int it0, double t0, hoc_optimize_result *result, int *limited) {
   *limited = 0;
   hoc_optimize_options o;
@@ -1873,37 +1743,37 @@ static hoc_status optimize_run(hoc_mesh *mesh, const hoc_optimize_options *optio
   HOC_CHECK(o.max_iterations <= 1000000, HOC_ERR_ARGUMENT, "too many iterations requested");
   HOC_CHECK(isfinite(o.tolerance), HOC_ERR_ARGUMENT, "tolerance must be a finite number");
   HOC_CHECK(o.free_rings >= 0, HOC_ERR_ARGUMENT, "free_rings must not be negative");
-  opt ctx = {0};
-  scratch *scr = NULL;
+  hoc_opt ctx = {0};
+  hoc_opt_scratch *scr = NULL;
   int nthreads = omp_get_max_threads();
   /* every node on the CAD from the start (a mesh read as written may have
    * nodes off the surface) */
   hoc_status status = hoc_mesh_update_xyz(mesh);
   if (status == HOC_OK) mesh->off_cad = 0;
   if (status == HOC_OK)
-    status = setup(&ctx, mesh, o.measure, o.fix_curves, o.free_elements, o.free_rings);
+    status = hoc_opt_setup(&ctx, mesh, o.measure, o.fix_curves, o.free_elements, o.free_rings);
   ctx.protect = protect; /* (setup clears ctx) */
-  if (status == HOC_OK) status = eval_all(&ctx);
-  if (status == HOC_OK) status = scratch_alloc(&ctx, nthreads, &scr);
+  if (status == HOC_OK) status = hoc_opt_eval_all(&ctx);
+  if (status == HOC_OK) status = hoc_opt_scratch_alloc(&ctx, nthreads, &scr);
   if (status != HOC_OK) {
-    scratch_free(scr, nthreads);
-    opt_free(&ctx);
+    hoc_opt_scratch_free(scr, nthreads);
+    hoc_opt_free(&ctx);
     return status;
   }
   hoc_optimize_result res = {0};
-  snapshot best = {0}, pre = {0}; /* pre: the state before the polish */
+  hoc_opt_snapshot best = {0}, pre = {0}; /* pre: the state before the polish */
   best.tangled = SIZE_MAX;
   for (size_t i = 0; i < mesh->n_nodes; ++i) {
     ctx.active[i] = ctx.ndof[i] > 0;
     res.free_nodes += ctx.ndof[i] > 0;
   }
-  wake_all(&ctx);
+  hoc_opt_wake_all(&ctx);
   double f, qmin;
   size_t tangled;
   /* the initial tangled count by the exact test (as measuring counts),
    * then the first phase's sampled state */
   ctx.exact = 1;
-  HOC_TRY_GOTO(sweep_start(&ctx, &f, &qmin, &tangled), done);
+  HOC_TRY_GOTO(hoc_opt_sweep_start(&ctx, &f, &qmin, &tangled), done);
   res.tangled_initial = tangled;
   res.fragile = mark_fragile(&ctx);
   /* the first phase counts at the samples; a local repair (free_elements)
@@ -1913,10 +1783,10 @@ static hoc_status optimize_run(hoc_mesh *mesh, const hoc_optimize_options *optio
    * and went no lower than 11 in the exact phase) */
   ctx.exact = ctx.touched != NULL;
   memset(ctx.dirty, 1, mesh->n_elems);
-  HOC_TRY_GOTO(sweep_start(&ctx, &f, &qmin, &tangled), done);
+  HOC_TRY_GOTO(hoc_opt_sweep_start(&ctx, &f, &qmin, &tangled), done);
   res.objective_initial = f;
   size_t fewest = tangled; /* and res.best_iteration = 0: when it was reached */
-  if (tangled) HOC_TRY_GOTO(snapshot_take(&best, mesh, tangled, f), done);
+  if (tangled) HOC_TRY_GOTO(hoc_opt_snapshot_take(&best, mesh, tangled, f), done);
   /* last: the last sweep of this attempt; since: the sweep before the
    * mesh's run of untangled sweeps (or the second attempt) began */
   int stalled = 0, last = it0 + o.max_iterations, since = it0;
@@ -1941,8 +1811,8 @@ sweeps:
         res.stopped_at_limit = tangled && !cut;
         break;
       }
-      snapshot_restore(&best, mesh);
-      HOC_TRY_GOTO(eval_all(&ctx), done);
+      hoc_opt_snapshot_restore(&best, mesh);
+      HOC_TRY_GOTO(hoc_opt_eval_all(&ctx), done);
       ctx.relax_uv = 1;
       ctx.eps = 1e-3;
       stalled = 0;
@@ -1950,14 +1820,14 @@ sweeps:
       cut = 0;
       last = it - 1 + (o.max_iterations + 1) / 2;
       memset(ctx.dirty, 1, mesh->n_elems);
-      wake_all(&ctx);
-      HOC_TRY_GOTO(sweep_start(&ctx, &f, &qmin, &tangled), done);
+      hoc_opt_wake_all(&ctx);
+      HOC_TRY_GOTO(hoc_opt_sweep_start(&ctx, &f, &qmin, &tangled), done);
       res.second_attempt = it;
     }
     size_t moved = 0;
     int local = ctx.exact && tangled;
-    if (local) mark_near(&ctx);
-    else if (ctx.local) wake_all(&ctx); /* the nodes left awake elsewhere */
+    if (local) hoc_opt_mark_near(&ctx);
+    else if (ctx.local) hoc_opt_wake_all(&ctx); /* the nodes left awake elsewhere */
     ctx.local = local;
     /* nodes near tangled elements and nodes of poor elements (q below half
      * the mean: those that set the mesh's worst quality) never sleep */
@@ -1968,7 +1838,7 @@ sweeps:
       if (ctx.region[e] || ctx.qe[e] < 0.5 * qmean)
         for (int i = 0; i < ctx.np; ++i) {
           size_t node = mesh->conn[e * (size_t)ctx.np + (size_t)i];
-          if (ctx.ndof[node]) wake_node(&ctx, node);
+          if (ctx.ndof[node]) hoc_opt_wake_node(&ctx, node);
         }
     /* a step worth less than a small share of the average node's part of f
      * puts its block to sleep */
@@ -1978,13 +1848,13 @@ sweeps:
      * moving nodes further out); then only significant ones do */
     ctx.wake_factor = tangled ? 1 : 10;
     if (it == it0 + 1) {
-      HOC_TRY_GOTO(screen(&ctx), done);
-      wake_all(&ctx);
+      HOC_TRY_GOTO(hoc_opt_screen(&ctx), done);
+      hoc_opt_wake_all(&ctx);
       for (size_t e = 0; e < mesh->n_elems; ++e)
         if (ctx.qe[e] < 0.5 * qmean)
           for (int i = 0; i < ctx.np; ++i) {
             size_t node = mesh->conn[e * (size_t)ctx.np + (size_t)i];
-            if (ctx.ndof[node]) wake_node(&ctx, node);
+            if (ctx.ndof[node]) hoc_opt_wake_node(&ctx, node);
           }
     }
     /* the natural blocks, then every node on its own */
@@ -1992,13 +1862,13 @@ sweeps:
       ctx.B = &ctx.fam[fam];
       for (int c = 0; c < ctx.B->n_colors; ++c) {
         size_t mc;
-        HOC_TRY_GOTO(do_color(&ctx, c, scr, nthreads, &mc), done);
+        HOC_TRY_GOTO(hoc_opt_do_color(&ctx, c, scr, nthreads, &mc), done);
         moved += mc;
       }
     }
     ctx.B = &ctx.fam[0];
     size_t tangled_before = tangled;
-    HOC_TRY_GOTO(sweep_start(&ctx, &f, &qmin, &tangled), done);
+    HOC_TRY_GOTO(hoc_opt_sweep_start(&ctx, &f, &qmin, &tangled), done);
     res.iterations = it;
     if (tangled < fewest) {
       fewest = tangled;
@@ -2011,7 +1881,7 @@ sweeps:
       cut = 1;
     }
     if (tangled && tangled < best.tangled)
-      HOC_TRY_GOTO(snapshot_take(&best, mesh, tangled, f), done);
+      HOC_TRY_GOTO(hoc_opt_snapshot_take(&best, mesh, tangled, f), done);
     /* untangling that stalls: a smoother regularised landscape (larger
      * delta) for a while; back to the small one as soon as it moves on */
     if (tangled && tangled >= tangled_before) {
@@ -2027,18 +1897,18 @@ sweeps:
         ctx.eps = ctx.eps < 0.05 ? ctx.eps * 10 : 1e-3;
         stalled = 0;
         memset(ctx.dirty, 1, mesh->n_elems); /* every delta changes */
-        HOC_TRY_GOTO(sweep_start(&ctx, &f, &qmin, &tangled), done);
+        HOC_TRY_GOTO(hoc_opt_sweep_start(&ctx, &f, &qmin, &tangled), done);
       }
     } else if (tangled < tangled_before && ctx.eps > 1e-3) {
       ctx.eps = 1e-3;
       stalled = 0;
       memset(ctx.dirty, 1, mesh->n_elems);
-      HOC_TRY_GOTO(sweep_start(&ctx, &f, &qmin, &tangled), done);
+      HOC_TRY_GOTO(hoc_opt_sweep_start(&ctx, &f, &qmin, &tangled), done);
     } else {
       stalled = 0;
     }
     if (o.progress) {
-      hoc_optimize_iteration info = {it, f, qmin, tangled, moved, now() - t0, 1 + ctx.relax_uv};
+      hoc_optimize_iteration info = {it, f, qmin, tangled, moved, hoc_opt_now() - t0, 1 + ctx.relax_uv};
       if (o.progress(o.progress_user, &info)) {
         status = HOC_ERROR(HOC_ERR_INTERRUPTED, "optimisation interrupted");
         goto done;
@@ -2070,10 +1940,10 @@ sweeps:
     }
   }
   if (best.tangled != SIZE_MAX && tangled > best.tangled) {
-    snapshot_restore(&best, mesh); /* more tangled than once: the best state reached */
-    HOC_TRY_GOTO(eval_all(&ctx), done);
+    hoc_opt_snapshot_restore(&best, mesh); /* more tangled than once: the best state reached */
+    HOC_TRY_GOTO(hoc_opt_eval_all(&ctx), done);
     memset(ctx.dirty, 1, mesh->n_elems);
-    HOC_TRY_GOTO(sweep_start(&ctx, &f, &qmin, &tangled), done);
+    HOC_TRY_GOTO(hoc_opt_sweep_start(&ctx, &f, &qmin, &tangled), done);
   }
   /* The second phase: the exact fold tests (hoc_element_folded) find
    * folds between the samples (an optimiser that keeps sigma > 0 at samples
@@ -2090,12 +1960,12 @@ sweeps:
     memset(ctx.dirty, 1, mesh->n_elems);
     size_t sampled = tangled;
     *limited = res.stopped_at_limit;
-    HOC_TRY_GOTO(sweep_start(&ctx, &f, &qmin, &tangled), done);
+    HOC_TRY_GOTO(hoc_opt_sweep_start(&ctx, &f, &qmin, &tangled), done);
     /* (not after sweeps cut short by --max-iterations with elements still
      * tangled by samples: the caller asked for no more) */
     if (tangled > sampled && (!sampled || !res.stopped_at_limit)) {
       res.exact_phase = it + 1;
-      HOC_TRY_GOTO(snapshot_take(&best, mesh, tangled, f), done);
+      HOC_TRY_GOTO(hoc_opt_snapshot_take(&best, mesh, tangled, f), done);
       fewest = tangled;
       res.converged = 0;
       ctx.relax_uv = 0;
@@ -2111,9 +1981,9 @@ sweeps:
    * out: --max-iterations asked for no more) */
   if (tangled && ctx.exact && !res.stopped_at_limit) {
     size_t before = tangled;
-    HOC_TRY_GOTO(snapshot_take(&pre, mesh, tangled, f), done);
-    HOC_TRY_GOTO(polish(&ctx), done);
-    HOC_TRY_GOTO(sweep_start(&ctx, &f, &qmin, &tangled), done);
+    HOC_TRY_GOTO(hoc_opt_snapshot_take(&pre, mesh, tangled, f), done);
+    HOC_TRY_GOTO(hoc_opt_polish(&ctx), done);
+    HOC_TRY_GOTO(hoc_opt_sweep_start(&ctx, &f, &qmin, &tangled), done);
     if (tangled < before) {
       res.polished += before - tangled;
       if (!tangled && !smoothing) {
@@ -2127,37 +1997,37 @@ sweeps:
         since = fell = it;
         cut = 0;
         last = it + (o.max_iterations + 1) / 2;
-        wake_all(&ctx);
+        hoc_opt_wake_all(&ctx);
         goto sweeps;
       }
     } else { /* none untangled: the sweeps' state, whose shapes are better */
-      snapshot_restore(&pre, mesh);
-      HOC_TRY_GOTO(eval_all(&ctx), done);
+      hoc_opt_snapshot_restore(&pre, mesh);
+      HOC_TRY_GOTO(hoc_opt_eval_all(&ctx), done);
       memset(ctx.dirty, 1, mesh->n_elems);
-      HOC_TRY_GOTO(sweep_start(&ctx, &f, &qmin, &tangled), done);
+      HOC_TRY_GOTO(hoc_opt_sweep_start(&ctx, &f, &qmin, &tangled), done);
     }
   }
 done:
-  snapshot_free(&pre);
-  snapshot_free(&best);
+  hoc_opt_snapshot_free(&pre);
+  hoc_opt_snapshot_free(&best);
   res.objective_final = f;
   res.tangled_final = tangled;
-  res.seconds = now() - t0;
+  res.seconds = hoc_opt_now() - t0;
   if (result) *result = res;
-  scratch_free(scr, nthreads);
-  opt_free(&ctx);
+  hoc_opt_scratch_free(scr, nthreads);
+  hoc_opt_free(&ctx);
   return status;
 }
 
 hoc_status hoc_mesh_optimize(hoc_mesh *mesh, const hoc_optimize_options *options,
                              hoc_optimize_result *result) {
   HOC_CHECK(mesh, HOC_ERR_ARGUMENT, "no mesh given");
-  double t0 = now();
-  snapshot start = {0}, first = {0};
+  double t0 = hoc_opt_now();
+  hoc_opt_snapshot start = {0}, first = {0};
   hoc_optimize_result a = {0}, b = {0};
   int limited = 0, limited_b;
-  hoc_status status = snapshot_take(&start, mesh, 0, 0);
-  if (status == HOC_OK) status = optimize_run(mesh, options, 0, 0, t0, &a, &limited);
+  hoc_status status = hoc_opt_snapshot_take(&start, mesh, 0, 0);
+  if (status == HOC_OK) status = hoc_opt_run(mesh, options, 0, 0, t0, &a, &limited);
   /* Left tangled (not for want of sweeps): a protected run from the start,
    * in which the first phase's steps may not fold an element between
    * samples that the exact test finds valid, kept if it leaves fewer
@@ -2173,10 +2043,10 @@ hoc_status hoc_mesh_optimize(hoc_mesh *mesh, const hoc_optimize_options *options
    * sweep, as a protected run would, so that run would only repeat it. */
   if (status == HOC_OK && a.tangled_final && !limited && mesh->order <= PROTECT_MAX_ORDER &&
       !(options && options->free_elements)) {
-    status = snapshot_take(&first, mesh, a.tangled_final, a.objective_final);
+    status = hoc_opt_snapshot_take(&first, mesh, a.tangled_final, a.objective_final);
     if (status == HOC_OK) {
-      snapshot_restore(&start, mesh);
-      status = optimize_run(mesh, options, 1, a.iterations, t0, &b, &limited_b);
+      hoc_opt_snapshot_restore(&start, mesh);
+      status = hoc_opt_run(mesh, options, 1, a.iterations, t0, &b, &limited_b);
     }
     if (status == HOC_OK && b.tangled_final < a.tangled_final) {
       b.protected_run = a.iterations + 1;
@@ -2184,13 +2054,13 @@ hoc_status hoc_mesh_optimize(hoc_mesh *mesh, const hoc_optimize_options *options
       b.objective_initial = a.objective_initial;
       a = b;
     } else if (first.param) {
-      snapshot_restore(&first, mesh); /* (also when the protected run failed) */
+      hoc_opt_snapshot_restore(&first, mesh); /* (also when the protected run failed) */
       if (status == HOC_OK) a.iterations = b.iterations; /* sweeps made, though not kept */
     }
   }
-  a.seconds = now() - t0;
-  snapshot_free(&start);
-  snapshot_free(&first);
+  a.seconds = hoc_opt_now() - t0;
+  hoc_opt_snapshot_free(&start);
+  hoc_opt_snapshot_free(&first);
   if (result && status == HOC_OK) *result = a;
   return status;
 }
@@ -2199,30 +2069,30 @@ hoc_status hoc_mesh_optimize(hoc_mesh *mesh, const hoc_optimize_options *options
 
 /* Local objective of block b with unknown `dof` moved by h (the nodes it
  * carries follow), positions and normals evaluated on the CAD. */
-static hoc_status block_f_at(opt *o, size_t b, int dof, double h, scratch *s, double *f) {
+static hoc_status block_f_at(hoc_opt *o, size_t b, int dof, double h, hoc_opt_scratch *s, double *f) {
   double *st = o->step + o->B->bd_start[b];
   int nd = (int)(o->B->bd_start[b + 1] - o->B->bd_start[b]);
   for (int c = 0; c < nd; ++c) st[c] = c == dof ? h : 0;
   o->alpha[b] = 1;
-  set_trial_params(o, b);
+  hoc_opt_set_trial_params(o, b);
   size_t n = 0;
   size_t nlist = o->B->bn_start[b + 1] - o->B->bn_start[b] + o->B->carry_start[b + 1] - o->B->carry_start[b];
   size_t *list = hoc_calloc(nlist + 1, sizeof *list);
   HOC_CHECK(list, HOC_ERR_MEMORY, "out of memory");
   for (size_t c = o->B->bn_start[b]; c < o->B->bn_start[b + 1]; ++c) list[n++] = o->B->bn_node[c];
   for (size_t j = o->B->carry_start[b]; j < o->B->carry_start[b + 1]; ++j) list[n++] = o->B->carry_node[j];
-  hoc_status st2 = eval_trials(o, list, n, 1);
+  hoc_status st2 = hoc_opt_eval_trials(o, list, n, 1);
   free(list);
   HOC_TRY(st2);
-  set_moving(o, b, 1);
+  hoc_opt_set_moving(o, b, 1);
   *f = 0;
   for (size_t a = o->B->be_start[b]; a < o->B->be_start[b + 1]; ++a) {
     size_t e = o->B->be_elem[a];
-    gather(o, e, s->x, s->n);
-    int nr = elem_residuals(o, e, s->x, s->n, NULL, s->r, NULL, NULL);
+    hoc_opt_gather(o, e, s->x, s->n);
+    int nr = hoc_opt_elem_residuals(o, e, s->x, s->n, NULL, s->r, NULL, NULL);
     for (int q = 0; q < nr; ++q) *f += s->r[q] * s->r[q];
   }
-  set_moving(o, b, 0);
+  hoc_opt_set_moving(o, b, 0);
   return HOC_OK;
 }
 
@@ -2230,24 +2100,24 @@ hoc_status hoc_mesh_check_gradient(hoc_mesh *mesh, hoc_measure measure, int fix_
                                    int samples, double *max_rel_error) {
   HOC_CHECK(mesh && max_rel_error, HOC_ERR_ARGUMENT, "NULL argument");
   HOC_CHECK(samples > 0, HOC_ERR_ARGUMENT, "need at least one sample");
-  opt ctx = {0};
-  scratch *scr = NULL;
-  hoc_status status = setup(&ctx, mesh, measure, fix_curves, NULL, 0);
-  if (status == HOC_OK) status = eval_all(&ctx);
-  if (status == HOC_OK) status = scratch_alloc(&ctx, 1, &scr);
+  hoc_opt ctx = {0};
+  hoc_opt_scratch *scr = NULL;
+  hoc_status status = hoc_opt_setup(&ctx, mesh, measure, fix_curves, NULL, 0);
+  if (status == HOC_OK) status = hoc_opt_eval_all(&ctx);
+  if (status == HOC_OK) status = hoc_opt_scratch_alloc(&ctx, 1, &scr);
   if (status != HOC_OK) {
-    scratch_free(scr, 1);
-    opt_free(&ctx);
+    hoc_opt_scratch_free(scr, 1);
+    hoc_opt_free(&ctx);
     return status;
   }
   double f, qmin;
   size_t tangled;
-  HOC_TRY_GOTO(sweep_start(&ctx, &f, &qmin, &tangled), done);
+  HOC_TRY_GOTO(hoc_opt_sweep_start(&ctx, &f, &qmin, &tangled), done);
   size_t stride = ctx.B->n_blocks > (size_t)samples ? ctx.B->n_blocks / (size_t)samples : 1;
   double worst = 0, gmax = 0;
   for (size_t b = 0; b < ctx.B->n_blocks; b += stride) {
     double fl;
-    block_model(&ctx, b, scr, &fl, scr->g, scr->H);
+    hoc_opt_block_model(&ctx, b, scr, &fl, scr->g, scr->H);
     int nd = (int)(ctx.B->bd_start[b + 1] - ctx.B->bd_start[b]);
     for (int d = 0; d < nd; ++d) {
       /* the node owning this unknown sets the scale of the step */
@@ -2275,7 +2145,7 @@ hoc_status hoc_mesh_check_gradient(hoc_mesh *mesh, hoc_measure measure, int fix_
   /* a norm-wise relative error, as PETSc's -snes_test_jacobian reports */
   *max_rel_error = gmax > 0 ? worst / gmax : worst;
 done:
-  scratch_free(scr, 1);
-  opt_free(&ctx);
+  hoc_opt_scratch_free(scr, 1);
+  hoc_opt_free(&ctx);
   return status;
 }

@@ -1,0 +1,204 @@
+/* Internals of the optimiser (hoc_mesh_optimize, hoc_mesh_polish,
+ * hoc_mesh_check_gradient): its state, the block families and the
+ * functions its files share.
+ * SPDX-License-Identifier: GPL-2.0-or-later
+ */
+#ifndef HOC_OPTIMIZE_IMPL_H
+#define HOC_OPTIMIZE_IMPL_H
+
+#include "mesh/mesh.h"
+#include "quality/quality.h"
+
+#include <stddef.h>
+
+/* A family of blocks: each block a set of free nodes updated together. */
+typedef struct hoc_opt_blockset {
+  size_t n_blocks;
+  size_t *bn_start, *bn_node; /* block -> its nodes */
+  size_t *be_start, *be_elem; /* block -> the elements it touches */
+  size_t *bd_start;           /* block -> first of its unknowns in step[] */
+  size_t *node_block;         /* [n_nodes] block of a free node (SIZE_MAX if fixed) */
+  int *node_off;              /* [n_nodes] offset of the node's unknowns in its block */
+  size_t *carry_start;        /* [n_blocks+1] nodes a vertex block carries ... */
+  size_t *carry_node;
+  double *carry_w; /* ... and their weights */
+  int max_nd;      /* most unknowns in a block */
+  int n_colors;
+  size_t *color_start; /* [n_colors+1] */
+  size_t *color_block;
+  /* Blocks woken since their colour last ran, per colour (most sleep: a
+   * colour then looks at these instead of all its blocks) */
+  int *block_color;        /* [n_blocks] */
+  size_t *queue_head;      /* [n_colors] first queued block, SIZE_MAX if none */
+  size_t *queue_next;      /* [n_blocks] next in its colour's queue */
+  unsigned char *queued;   /* [n_blocks] */
+  unsigned char *scan_all; /* [n_colors] every block may be active: look at all */
+} hoc_opt_blockset;
+
+typedef struct hoc_opt {
+  hoc_mesh *m;
+  const hoc_model *model;
+  const hoc_quality_tables *t;
+  hoc_measure measure;
+  int np, nq;
+  unsigned char *ndof; /* [n_nodes] unknowns of the node: 0, 1 (t) or 2 (u, v) */
+  size_t *ne_start;    /* [n_nodes+1] node -> elements */
+  size_t *ne_elem;     /* element */
+  int *ne_local;       /* local index of the node in it */
+  size_t *ns_start;    /* [n_nodes+1] node -> slots */
+  size_t *ns_slot;
+  size_t *nl_start; /* [n_nodes+1] node -> lines */
+  size_t *nl_line;
+  hoc_opt_blockset fam[2]; /* 0: vertices (with carried stars), edges, interiors; 1: single nodes */
+  hoc_opt_blockset *B;     /* the family being swept */
+  int max_nd;              /* most unknowns in a block of either family */
+  /* state */
+  double *dz;                 /* [n_nodes][6] dx/dz: (phi_u, phi_v) or (c', 0) */
+  double *normal;             /* [n_slots][3] unit CAD normal at each slot, oriented */
+  double *delta;              /* [n_elems] regularisation of the sweep */
+  unsigned char *valid;       /* [n_elems] not tangled (Definition 2) */
+  unsigned char *pvalid;      /* [n_elems] not folded in the (u,v) plane */
+  unsigned char *xvalid;      /* [n_elems] valid by the exact test too: in a protected run a step
+                                 may not fold it between samples (one folded there already may
+                                 stay so for a while) */
+  int protect;                /* a protected run (see hoc_mesh_optimize) */
+  unsigned char *fragile;     /* [n_elems] guarded as in a protected run (see mark_fragile) */
+  unsigned char *on_boundary; /* [n_elems] has a node on a CAD curve or vertex: kept unfolded in
+                           (u,v) so no node leaves the trimmed face (inside, 3D validity of
+                           the neighbours is the barrier) */
+  unsigned char *region;      /* [n_elems] tangled or next to a tangled element: regularised, and
+                                 free to pass through sigma = 0 during the sweep */
+  unsigned char *was_region;  /* [n_elems] region of the previous sweep */
+  unsigned char *dirty;       /* [n_elems] a node moved since the last hoc_opt_sweep_start */
+  double *delta_own;          /* [n_elems] regularisation from the element's own tangling */
+  unsigned char *has_fold;    /* [n_elems] tangled by the exact tests alone (the second phase): */
+  double *fold_rs;            /* [n_elems][2] a point where they find sigma < 0, a residual there */
+  double *fe, *qe;        /* [n_elems] objective part and q, as of the last hoc_opt_sweep_start */
+  double *hsize;          /* [n_nodes] local length: bound on one step's displacement */
+  unsigned char *active;  /* [n_nodes] */
+  unsigned char *near;    /* [n_nodes] within NEAR_RINGS elements of a tangled element ... */
+  unsigned char *near_e;  /* [n_elems] (scratch of hoc_opt_mark_near) */
+  int local;              /* ... and only blocks with such a node move (the exact phase while
+                             some element is tangled) */
+  unsigned char *touched; /* [n_elems] has a node that may move (NULL: no node is held by
+                             hoc_optimize_options.free_elements) */
+  double min_gain;        /* per node: a step that lowers f by less puts the block to sleep */
+  double eps;             /* regularisation scale of tangled elements (relative to their size) */
+  int relax_uv;           /* second attempt: relaxed elements may fold in (u, v) too */
+  int exact;              /* the tangle test with the exact fold tests, and dense edge
+                             residuals while untangling (the second phase) */
+  double wake_factor;     /* a move must gain this many times min_gain to wake its neighbours */
+  unsigned char *moving;  /* [n_nodes] use the trial state of this node */
+  /* trial state */
+  double *step;         /* [unknowns] Gauss-Newton direction of each block */
+  double *alpha;        /* [n_blocks] step length */
+  double *f0, *fnew;    /* [n_blocks] local objective before / after */
+  double *slope;        /* [n_blocks] g . step (< 0) */
+  unsigned char *state; /* [n_blocks] 0 idle, 1 trying, 2 accepted */
+  size_t *list;         /* [n_blocks] hoc_opt_scratch */
+  size_t *committed;    /* [n_blocks] blocks of the current colour that moved */
+  double *tpar;         /* [n_nodes][2] trial parameters */
+  double *txyz;         /* [n_nodes][3] */
+  double *tdz;          /* [n_nodes][6] */
+  double *tslot_uv;     /* [n_slots][2] */
+  double *tnormal;      /* [n_slots][3] */
+} hoc_opt;
+
+typedef struct hoc_opt_scratch {
+  double *x, *n, *r, *J, *uv, *Jz, *H, *g, *L;
+  double *w;         /* [np] hoc_opt_block_model: a node's weight in the block, */
+  int *off;          /* its first unknown, */
+  unsigned char *nd; /* and its unknowns (0: not moved by the block) */
+} hoc_opt_scratch;
+
+/* Append node to block b's list if free and not there yet. */
+typedef struct hoc_growlist {
+  size_t *v;
+  size_t n, cap;
+} hoc_growlist;
+
+/* The mesh state the optimiser changes (node parameters and positions, slot
+ * and element parameters, line ends), kept while untangling so that a run
+ * that ends with more tangled elements than it once had returns the best
+ * state reached: a raised regularisation lets valid neighbours of a fold
+ * pass through sigma = 0, which does not always pay off. */
+typedef struct hoc_opt_snapshot {
+  double *param, *xyz, *slot_uv, *elem_uv, *line_t;
+  size_t tangled; /* SIZE_MAX: none taken */
+  double objective;
+} hoc_opt_snapshot;
+
+/* Element e may not fold between the samples (its steps run the exact
+ * tests): every element of a protected run, the fragile ones of any run. */
+static inline int hoc_opt_guarded(const hoc_opt *o, size_t e) {
+  return o->protect || o->fragile[e];
+}
+
+static inline void hoc_opt_cross(const double *a, const double *b, double *c) {
+  c[0] = a[1] * b[2] - a[2] * b[1];
+  c[1] = a[2] * b[0] - a[0] * b[2];
+  c[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+/* Seconds on a monotonic clock. */
+double hoc_opt_now(void);
+
+/* Setup: adjacency, unknowns, state arrays ------------------------------- */
+
+hoc_status hoc_opt_setup(hoc_opt *o, hoc_mesh *m, hoc_measure measure, int fix_curves,
+                         const unsigned char *free_elements, int free_rings);
+void hoc_opt_free(hoc_opt *o);
+hoc_status hoc_opt_eval_all(hoc_opt *o);
+hoc_status hoc_opt_csr_alloc(size_t n, size_t total, size_t **start, size_t **items);
+void hoc_opt_csr_finish_counts(size_t n, size_t *start);
+void hoc_opt_csr_restore(size_t n, size_t *start);
+void hoc_opt_grow_rings(const hoc_mesh *m, unsigned char *elem, unsigned char *node, int rings);
+hoc_status hoc_grow_push(hoc_growlist *g, size_t x);
+
+/* Blocks: families, carried nodes, colours, sleeping and waking --------- */
+
+hoc_status hoc_opt_build_blocks(hoc_opt *o, int family);
+double hoc_opt_carry_weight(const hoc_opt *o, size_t b, size_t node);
+void hoc_opt_set_moving(hoc_opt *o, size_t b, unsigned char v);
+void hoc_opt_wake_node(hoc_opt *o, size_t k);
+void hoc_opt_wake_all(hoc_opt *o);
+void hoc_opt_mark_near(hoc_opt *o);
+size_t hoc_opt_select_active(hoc_opt *o, int color);
+
+/* Objective: element residuals, per-sweep state, screening -------------- */
+
+void hoc_opt_gather(const hoc_opt *o, size_t e, double *x, double *n);
+int hoc_opt_param_valid(const hoc_opt *o, size_t e, double *uv);
+int hoc_opt_elem_residuals(const hoc_opt *o, size_t e, const double *x, const double *n,
+                           const unsigned char *need, double *r, double *J, double *smin);
+hoc_status hoc_opt_sweep_start(hoc_opt *o, double *objective, double *min_q, size_t *tangled);
+hoc_status hoc_opt_screen(hoc_opt *o);
+
+/* Trial state: parameters, CAD evaluation, acceptance -------------------- */
+
+void hoc_opt_trial_elem_uv(const hoc_opt *o, size_t k, size_t e, int kk, double *uv);
+int hoc_opt_set_trial_params(hoc_opt *o, size_t b);
+hoc_status hoc_opt_eval_trial(hoc_opt *o, size_t i);
+hoc_status hoc_opt_eval_trials(hoc_opt *o, const size_t *list, size_t n, int nthreads);
+int hoc_opt_line_monotone(const hoc_opt *o, size_t l);
+void hoc_opt_commit(hoc_opt *o, size_t k);
+
+/* Steps: block model, damped Gauss-Newton, line search ------------------- */
+
+void hoc_opt_block_model(const hoc_opt *o, size_t b, hoc_opt_scratch *s, double *f, double *g,
+                         double *H);
+hoc_status hoc_opt_do_color(hoc_opt *o, int color, hoc_opt_scratch *scr, int nthreads,
+                            size_t *moved);
+hoc_status hoc_opt_scratch_alloc(const hoc_opt *o, int nthreads, hoc_opt_scratch **out);
+void hoc_opt_scratch_free(hoc_opt_scratch *s, int nthreads);
+
+/* Polish, runs, snapshots ------------------------------------------------ */
+
+hoc_status hoc_opt_polish(hoc_opt *o);
+hoc_status hoc_opt_run(hoc_mesh *mesh, const hoc_optimize_options *options, int protect, int it0,
+                       double t0, hoc_optimize_result *result, int *limited);
+hoc_status hoc_opt_snapshot_take(hoc_opt_snapshot *s, const hoc_mesh *m, size_t tangled, double f);
+void hoc_opt_snapshot_restore(const hoc_opt_snapshot *s, hoc_mesh *m);
+void hoc_opt_snapshot_free(hoc_opt_snapshot *s);
+
+#endif
