@@ -36,6 +36,7 @@
  * sigma < 0 (see the end of hoc_mesh_optimize).
  */
 #include "optimize/optimize_impl.h"
+#include "optimize/tunables.h"
 
 #include <float.h>
 #include <math.h>
@@ -55,8 +56,8 @@ void hoc_optimize_options_default(hoc_optimize_options *o) {
   if (!o) return;
   memset(o, 0, sizeof *o);
   o->measure = HOC_MEASURE_SHAPE;
-  o->max_iterations = 100;
-  o->tolerance = 0.1;
+  o->max_iterations = HOC_OPT_DEFAULT_MAX_ITERATIONS;
+  o->tolerance = HOC_OPT_DEFAULT_TOLERANCE;
 }
 
 void hoc_opt_free(hoc_opt *o) {
@@ -110,12 +111,12 @@ static hoc_status face_normal(const hoc_opt *o, int f, const double *uv, const d
   double len = sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
   double scale = du[0] * du[0] + du[1] * du[1] + du[2] * du[2] + dv[0] * dv[0] +
                  dv[1] * dv[1] + dv[2] * dv[2];
-  if (!(len > 1e-10 * scale)) {
+  if (!(len > HOC_OPT_SINGULAR_NORMAL * scale)) {
     const hoc_cad_face *face = &o->model->faces[f];
     double p[2];
     for (int d = 0; d < 2; ++d) {
       double mid = 0.5 * (face->lo[d] + face->hi[d]);
-      p[d] = uv[d] + 1e-5 * (face->hi[d] - face->lo[d]) * (mid > uv[d] ? 1.0 : -1.0);
+      p[d] = uv[d] + HOC_OPT_NORMAL_OFFSET * (face->hi[d] - face->lo[d]) * (mid > uv[d] ? 1.0 : -1.0);
     }
     HOC_TRY(hoc_cad_face_eval(o->model, f, 1, p, NULL, a, b));
     hoc_opt_cross(a, b, c);
@@ -264,7 +265,7 @@ hoc_status hoc_opt_build_blocks(hoc_opt *o, int family) {
           if (o->ndof[node] != 2 || m->entity[node] != m->entity[k] || last[node] == b) continue;
           double r = o->t->rs[2 * i], s = o->t->rs[2 * i + 1];
           double lam = kk == 0 ? 1 - r - s : kk == 1 ? r : s;
-          if (!(lam > 1e-12)) continue;
+          if (!(lam > HOC_OPT_CARRY_MIN_WEIGHT)) continue;
           last[node] = b;
           status = hoc_grow_push(&cn, node);
           if (status != HOC_OK) break;
@@ -409,7 +410,7 @@ hoc_status hoc_opt_setup(hoc_opt *o, hoc_mesh *m, hoc_measure measure, int fix_c
   o->m = m;
   o->model = m->model;
   o->measure = measure;
-  o->eps = 1e-3;
+  o->eps = HOC_OPT_EPS;
   HOC_TRY(hoc_quality_tables_get(m->order, m->nodeset, &o->t));
   o->np = o->t->np;
   o->nq = o->t->nq;
@@ -1032,12 +1033,12 @@ static int damped_solve(int nd, const double *H, const double *g, double *L, dou
   double dmax = 0;
   for (int c = 0; c < nd; ++c) dmax = fmax(dmax, H[c * nd + c]);
   if (!(dmax > 0)) return 0;
-  for (double mu = 1e-10; mu < 1e6; mu *= 100) {
+  for (double mu = HOC_OPT_MU_FIRST; mu < HOC_OPT_MU_LAST; mu *= HOC_OPT_MU_GROWTH) {
     int ok = 1;
     for (int c = 0; c < nd && ok; ++c)
       for (int d = 0; d <= c; ++d) {
         double v = H[c * nd + d];
-        if (c == d) v += mu * fmax(H[c * nd + c], 1e-12 * dmax);
+        if (c == d) v += mu * fmax(H[c * nd + c], HOC_OPT_DIAG_FLOOR * dmax);
         for (int k = 0; k < d; ++k) v -= L[c * nd + k] * L[d * nd + k];
         if (c == d) {
           if (!(v > 0)) {
@@ -1094,43 +1095,26 @@ int hoc_opt_line_monotone(const hoc_opt *o, size_t l) {
   return 1;
 }
 
-/* Sweeps without a new fewest tangled count that end an attempt. */
-#define STALL_SWEEPS 40
-/* The same in the exact phase, whose few folds between samples the
- * untangling either opens within a few sweeps or not at all (the bottle
- * and the aircraft at orders 2, 3, 5: the same counts left after 15 as
- * after 40, in half the time; splitting them is `hocad`'s next step) */
-#define EXACT_STALL_SWEEPS 15
-
-/* Orders above this have no protected run (hoc_mesh_optimize; its exact
- * tests in every trial cost too much there), relaxed elements only in the
- * exact phase, and fragile elements (mark_fragile). */
-#define PROTECT_MAX_ORDER 5
-
 /* While untangling stalls (a raised regularisation), the valid neighbours
  * of tangled elements may pass through sigma = 0 for a while: some folds
- * only open by moving their neighbourhood through an invalid state. Fragile
- * elements never (mark_fragile). Above PROTECT_MAX_ORDER only in the exact
- * phase: in the first, the relaxed region folds between the samples more
- * than it opens, and the exact phase cannot open those folds again (the
- * bottle at order 10: 8 tangled at sweep 11, then 22-231 while relaxed, 19
- * left after 130 sweeps and 1 441 s; relaxed only in the exact phase and
- * with its fragile elements guarded, 0 after 59 sweeps, 252 s). In the
- * exact phase the last folds may need it (periodic_u_cst at order 10: its
- * one fold left there opens only so, 0 tangled, min q 0.258; never relaxed
- * it stays, and the split after leaves min q 0.195 against a bound of
- * 0.209). */
+ * only open by moving their neighbourhood through an invalid state.
+ * Fragile elements never (mark_fragile). Above HOC_OPT_PROTECT_MAX_ORDER
+ * only in the exact phase: in the sampled phase of a high order, the
+ * relaxed region folds between the samples more than it opens, and the
+ * exact phase cannot open those folds again. In the exact phase the last
+ * folds may need it (a single fold left on a periodic face at order 10
+ * opens only so). */
 static int relaxed(const hoc_opt *o, size_t e) {
-  return o->region[e] && o->eps > 2e-3 && !o->fragile[e] &&
-         (o->m->order <= PROTECT_MAX_ORDER || o->exact);
+  return o->region[e] && o->eps > HOC_OPT_EPS_RAISED && !o->fragile[e] &&
+         (o->m->order <= HOC_OPT_PROTECT_MAX_ORDER || o->exact);
 }
 
 /* In the second attempt (relax_uv), relaxed elements on a face's boundary
  * may also fold in (u, v): on a regular parametrisation that is the same
  * fold as in 3D, and the (u, v) rule would otherwise hold them where the 3D
  * rule lets go. Not on faces with a pole, where (u, v) folds without the
- * surface folding. Only in a second attempt: from the start it can trade one
- * fold for several (t20 at order 10 ends with 12 instead of 0). */
+ * surface folding. Only in a second attempt: from the start, on thin parts
+ * at high orders, it trades one fold for several. */
 static int relaxed_uv(const hoc_opt *o, size_t e) {
   if (!o->relax_uv || !relaxed(o, e)) return 0;
   const hoc_cad_face *f = &o->model->faces[o->m->elem_face[e]];
@@ -1255,16 +1239,10 @@ void hoc_opt_wake_node(hoc_opt *o, size_t k) {
   }
 }
 
-/* While the exact phase untangles, only blocks within NEAR_RINGS rings of
- * elements (sharing a node) of a tangled element move: its folds are few
- * and local, and waking the whole mesh (every move wakes its neighbours
- * while some element is tangled) moves nodes far from any fold, each move
- * testing its elements exactly. */
-#define NEAR_RINGS 3
-
+/* Flags the nodes within HOC_OPT_NEAR_RINGS rings of a tangled element. */
 void hoc_opt_mark_near(hoc_opt *o) {
   for (size_t e = 0; e < o->m->n_elems; ++e) o->near_e[e] = !o->valid[e];
-  hoc_opt_grow_rings(o->m, o->near_e, o->near, NEAR_RINGS);
+  hoc_opt_grow_rings(o->m, o->near_e, o->near, HOC_OPT_NEAR_RINGS);
 }
 
 /* Every block may be active (after a change of every node's flag). */
@@ -1325,8 +1303,8 @@ hoc_status hoc_opt_do_color(hoc_opt *o, int color, hoc_opt_scratch *scr, int nth
       double len = sqrt(dx[0] * dx[0] + dx[1] * dx[1] + dx[2] * dx[2]);
       len_max = fmax(len_max, len / o->hsize[k]);
     }
-    if (len_max > 0.25) alpha = 0.25 / len_max;
-    if (!(slope < 0) || !isfinite(slope) || !(len_max * alpha > 1e-12)) continue;
+    if (len_max > HOC_OPT_STEP_CAP) alpha = HOC_OPT_STEP_CAP / len_max;
+    if (!(slope < 0) || !isfinite(slope) || !(len_max * alpha > HOC_OPT_STEP_MIN)) continue;
     o->slope[b] = slope;
     o->alpha[b] = alpha;
     o->state[b] = 1;
@@ -1342,11 +1320,12 @@ hoc_status hoc_opt_do_color(hoc_opt *o, int color, hoc_opt_scratch *scr, int nth
   size_t *elist = hoc_calloc(n_eval + 1, sizeof *elist), n_committed = 0;
   HOC_CHECK(elist, HOC_ERR_MEMORY, "out of memory");
   hoc_status status = HOC_OK;
-  for (int attempt = 0; attempt < 12 && nt; ++attempt) {
+  for (int attempt = 0; attempt < HOC_OPT_LINE_SEARCH_TRIES && nt; ++attempt) {
     size_t ne_list = 0;
     for (size_t a = 0; a < nt; ++a) {
       size_t b = list[a];
-      for (int tries = 0; tries < 40 && !hoc_opt_set_trial_params(o, b); ++tries) o->alpha[b] *= 0.5;
+      for (int tries = 0; tries < HOC_OPT_RANGE_HALVINGS && !hoc_opt_set_trial_params(o, b); ++tries)
+        o->alpha[b] *= HOC_OPT_BACKTRACK;
       for (size_t c = o->B->bn_start[b]; c < o->B->bn_start[b + 1]; ++c) elist[ne_list++] = o->B->bn_node[c];
       for (size_t j = o->B->carry_start[b]; j < o->B->carry_start[b + 1]; ++j) elist[ne_list++] = o->B->carry_node[j];
     }
@@ -1356,14 +1335,14 @@ hoc_status hoc_opt_do_color(hoc_opt *o, int color, hoc_opt_scratch *scr, int nth
       size_t b = list[a];
       hoc_opt_scratch *s = &scr[omp_get_thread_num()];
       double f;
-      int ok = block_trial(o, b, s, o->f0[b] + 1e-4 * o->alpha[b] * o->slope[b], &f);
+      int ok = block_trial(o, b, s, o->f0[b] + HOC_OPT_ARMIJO * o->alpha[b] * o->slope[b], &f);
       if (ok) {
         for (size_t c = o->B->bn_start[b]; c < o->B->bn_start[b + 1]; ++c) hoc_opt_commit(o, o->B->bn_node[c]);
         for (size_t j = o->B->carry_start[b]; j < o->B->carry_start[b + 1]; ++j) hoc_opt_commit(o, o->B->carry_node[j]);
         o->fnew[b] = f;
         o->state[b] = 2;
       } else {
-        o->alpha[b] *= 0.5;
+        o->alpha[b] *= HOC_OPT_BACKTRACK;
       }
     }
     size_t keep = 0;
@@ -1500,30 +1479,27 @@ void hoc_opt_snapshot_restore(const hoc_opt_snapshot *s, hoc_mesh *m) {
  * derivative-free pattern search around each, one node at a time, on the
  * exact verdict itself. Gauss-Newton on the regularised objective trades a
  * fold against the shape of the whole neighbourhood and can settle with a
- * fold of a few thousandths (gmsh 4.8's order-3 bottle, face 4, where the
- * surface's speed across its ends is 1/200 of that in its middle); the
+ * fold of a few thousandths where the surface's parametrisation is very
+ * uneven (a face whose speed across its ends is a small fraction of that in
+ * its middle); the
  * search looks at nothing but the patch's folds. A move is kept only if no
  * element of the patch that was valid turns tangled or folds in (u, v), the
  * nodes stay in order along their curves, and the patch has fewer tangled
  * elements or the same with less negative sigma. */
 
-/* Polish budget: tangled elements looked at, and element measures per patch. */
-#define POLISH_MAX_TANGLED 32
-#define POLISH_MAX_MEASURES 30000
-
 /* Element e's margin in the trial state of `moving` nodes: positive if the
  * exact test finds it valid; else its smallest sigma over its corners'
- * area if that is negative, or -1e-9 for a fold between the samples.
- * (Not sigma / |D phi|^2, which a node moved far away shrinks towards 0:
- * on gmsh 4.8's bottle the search took an interior node 0.4 out of its
- * element of width 0.01 that way.) */
+ * area if that is negative, or HOC_OPT_POLISH_HIDDEN_FOLD for a fold
+ * between the samples. (Not sigma / |D phi|^2, which a node moved far away
+ * shrinks towards 0: the search would improve the margin by moving a node
+ * out of its element.) */
 static double polish_margin(const hoc_opt *o, size_t e, double *x, double *n) {
   hoc_opt_gather(o, e, x, n);
   double eta, ms = 0;
   double q = hoc_element_quality_test(o->t, o->measure, x, n, 1, &eta, &ms);
   if (q > 0) return ms > 0 ? ms : DBL_MIN;
   double s = hoc_element_min_sigma_area(o->t, x, n);
-  return s < 0 ? s : -1e-9;
+  return s < 0 ? s : HOC_OPT_POLISH_HIDDEN_FOLD;
 }
 
 /* Tangled count and the sum of negative margins of elements el[0..n). */
@@ -1591,9 +1567,10 @@ static hoc_status polish_patch(hoc_opt *o, size_t e0, unsigned char *mark) {
     pv[a] = (unsigned char)hoc_opt_param_valid(o, el[a], uv);
   size_t measures = nel;
   /* steps: a share of the node's local length, halved when no move helps */
-  for (double share = 0.25; share > 1.0 / 4096 && count && measures < POLISH_MAX_MEASURES;) {
+  for (double share = HOC_OPT_POLISH_SHARE;
+       share > HOC_OPT_POLISH_MIN_SHARE && count && measures < HOC_OPT_POLISH_MAX_MEASURES;) {
     int improved = 0;
-    for (size_t a = 0; a < nn && count && measures < POLISH_MAX_MEASURES; ++a) {
+    for (size_t a = 0; a < nn && count && measures < HOC_OPT_POLISH_MAX_MEASURES; ++a) {
       size_t k = nodes[a];
       int nd = o->ndof[k];
       for (int dir = 0; dir < 2 * nd && count; ++dir) {
@@ -1631,7 +1608,7 @@ static hoc_status polish_patch(hoc_opt *o, size_t e0, unsigned char *mark) {
           }
           if (ok && touches && pv[b]) ok = hoc_opt_param_valid(o, el[b], uv);
         }
-        ok = ok && (tc < count || (tc == count && tneg > neg + 1e-12 * fabs(neg)));
+        ok = ok && (tc < count || (tc == count && tneg > neg + HOC_OPT_POLISH_GAIN * fabs(neg)));
         if (ok) {
           hoc_opt_commit(o, k);
           memcpy(margin, trial, nel * sizeof *margin);
@@ -1656,14 +1633,14 @@ done:
 }
 
 /* The polish of every element still tangled by the exact test (at most
- * POLISH_MAX_TANGLED of them), in element order; the caller counts what it
+ * HOC_OPT_POLISH_MAX_TANGLED of them), in element order; the caller counts what it
  * untangled at its next hoc_opt_sweep_start. */
 hoc_status hoc_opt_polish(hoc_opt *o) {
   hoc_mesh *m = o->m;
   size_t tangled = 0;
   for (size_t e = 0; e < m->n_elems; ++e)
     tangled += o->qe[e] == 0.0;
-  if (!tangled || tangled > POLISH_MAX_TANGLED) return HOC_OK;
+  if (!tangled || tangled > HOC_OPT_POLISH_MAX_TANGLED) return HOC_OK;
   double *x = malloc(6 * (size_t)o->np * sizeof *x);
   unsigned char *mark = calloc(m->n_elems, 1);
   if (!x || !mark) {
@@ -1701,27 +1678,16 @@ hoc_status hoc_mesh_polish(hoc_mesh *mesh, hoc_measure measure, int fix_curves, 
   return status;
 }
 
-/* Quality below which a valid element is fragile. */
-#define FRAGILE_Q 0.1
-
-/* Above PROTECT_MAX_ORDER, in a whole-mesh run, the elements that start
- * valid (exact test) with q < FRAGILE_Q are fragile: no step may fold them
- * between the samples (guarded). Such an element, thin
- * (aspect 20-50: the bottle's thread strip, one layer of 50 needles across
- * a face 0.1 wide; the slivers at the aircraft's wing root), folds between
- * the samples of a high order at node moves of a small share of its width,
- * and once folded is seldom opened again: the bottle at order 10, never
- * relaxed but unguarded, ended with 15 tangled, all on that strip and all
- * valid at the start; guarded, with 0. They are few (50 of 20 670 on the
- * bottle, 8 of 7 818 on the aircraft), so their exact tests cost little.
- * Never relaxed either (relaxed). Sets o->fragile from qe; returns how
- * many. */
+/* Above HOC_OPT_PROTECT_MAX_ORDER, in a whole-mesh run, the elements that
+ * start valid (exact test) with q < HOC_OPT_FRAGILE_Q are fragile: no step
+ * may fold them between the samples (hoc_opt_guarded), and they are never
+ * relaxed (relaxed). Sets o->fragile from qe; returns how many. */
 static size_t mark_fragile(hoc_opt *o) {
   const hoc_mesh *m = o->m;
   size_t n = 0;
-  if (m->order <= PROTECT_MAX_ORDER || o->touched) return 0;
+  if (m->order <= HOC_OPT_PROTECT_MAX_ORDER || o->touched) return 0;
   for (size_t e = 0; e < m->n_elems; ++e) {
-    o->fragile[e] = o->qe[e] > 0 && o->qe[e] < FRAGILE_Q;
+    o->fragile[e] = o->qe[e] > 0 && o->qe[e] < HOC_OPT_FRAGILE_Q;
     n += o->fragile[e];
   }
   return n;
@@ -1736,11 +1702,11 @@ hoc_status hoc_opt_run(hoc_mesh *mesh, const hoc_optimize_options *options, int 
   hoc_optimize_options o;
   hoc_optimize_options_default(&o);
   if (options) o = *options;
-  if (o.max_iterations <= 0) o.max_iterations = 100;
-  if (!(o.tolerance > 0)) o.tolerance = 0.1;
+  if (o.max_iterations <= 0) o.max_iterations = HOC_OPT_DEFAULT_MAX_ITERATIONS;
+  if (!(o.tolerance > 0)) o.tolerance = HOC_OPT_DEFAULT_TOLERANCE;
   HOC_CHECK(o.measure == HOC_MEASURE_SHAPE || o.measure == HOC_MEASURE_ODDY, HOC_ERR_ARGUMENT,
             "unknown distortion measure %d", (int)o.measure);
-  HOC_CHECK(o.max_iterations <= 1000000, HOC_ERR_ARGUMENT, "too many iterations requested");
+  HOC_CHECK(o.max_iterations <= HOC_OPT_MAX_ITERATIONS_LIMIT, HOC_ERR_ARGUMENT, "too many iterations requested");
   HOC_CHECK(isfinite(o.tolerance), HOC_ERR_ARGUMENT, "tolerance must be a finite number");
   HOC_CHECK(o.free_rings >= 0, HOC_ERR_ARGUMENT, "free_rings must not be negative");
   hoc_opt ctx = {0};
@@ -1793,7 +1759,7 @@ hoc_status hoc_opt_run(hoc_mesh *mesh, const hoc_optimize_options *options, int 
   int fell = it0; /* the last sweep of this attempt with a new fewest tangled */
   int smoothing = 0; /* sweeps after a polish that left none tangled */
   int cut = 0;  /* this attempt was ended before its sweeps ran out */
-  double hist_f[11], hist_q[11];
+  double hist_f[HOC_OPT_STAGNATION_SWEEPS + 1], hist_q[HOC_OPT_STAGNATION_SWEEPS + 1];
   int it = it0;
   res.best_iteration = it0;
 sweeps:
@@ -1814,11 +1780,11 @@ sweeps:
       hoc_opt_snapshot_restore(&best, mesh);
       HOC_TRY_GOTO(hoc_opt_eval_all(&ctx), done);
       ctx.relax_uv = 1;
-      ctx.eps = 1e-3;
+      ctx.eps = HOC_OPT_EPS;
       stalled = 0;
       since = fell = it - 1;
       cut = 0;
-      last = it - 1 + (o.max_iterations + 1) / 2;
+      last = it - 1 + HOC_OPT_LATER_SWEEPS(o.max_iterations);
       memset(ctx.dirty, 1, mesh->n_elems);
       hoc_opt_wake_all(&ctx);
       HOC_TRY_GOTO(hoc_opt_sweep_start(&ctx, &f, &qmin, &tangled), done);
@@ -1835,7 +1801,7 @@ sweeps:
     for (size_t e = 0; e < mesh->n_elems; ++e) qmean += ctx.qe[e];
     qmean /= (double)(mesh->n_elems ? mesh->n_elems : 1);
     for (size_t e = 0; e < mesh->n_elems; ++e)
-      if (ctx.region[e] || ctx.qe[e] < 0.5 * qmean)
+      if (ctx.region[e] || ctx.qe[e] < HOC_OPT_POOR_Q_SHARE * qmean)
         for (int i = 0; i < ctx.np; ++i) {
           size_t node = mesh->conn[e * (size_t)ctx.np + (size_t)i];
           if (ctx.ndof[node]) hoc_opt_wake_node(&ctx, node);
@@ -1846,12 +1812,12 @@ sweeps:
         o.tolerance * free_objective(&ctx, f) / (double)(res.free_nodes ? res.free_nodes : 1);
     /* while untangling, every move wakes its neighbourhood (room is made by
      * moving nodes further out); then only significant ones do */
-    ctx.wake_factor = tangled ? 1 : 10;
+    ctx.wake_factor = tangled ? HOC_OPT_WAKE_UNTANGLING : HOC_OPT_WAKE_SMOOTHING;
     if (it == it0 + 1) {
       HOC_TRY_GOTO(hoc_opt_screen(&ctx), done);
       hoc_opt_wake_all(&ctx);
       for (size_t e = 0; e < mesh->n_elems; ++e)
-        if (ctx.qe[e] < 0.5 * qmean)
+        if (ctx.qe[e] < HOC_OPT_POOR_Q_SHARE * qmean)
           for (int i = 0; i < ctx.np; ++i) {
             size_t node = mesh->conn[e * (size_t)ctx.np + (size_t)i];
             if (ctx.ndof[node]) hoc_opt_wake_node(&ctx, node);
@@ -1874,9 +1840,9 @@ sweeps:
       fewest = tangled;
       res.best_iteration = fell = it;
     }
-    /* no new fewest for STALL_SWEEPS sweeps: this attempt ends (the count
+    /* no new fewest for HOC_OPT_STALL_SWEEPS sweeps: this attempt ends (the count
      * has been seen to fall again after 32 on t20 at order 10) */
-    if (tangled && it - fell >= (ctx.exact ? EXACT_STALL_SWEEPS : STALL_SWEEPS) && it < last) {
+    if (tangled && it - fell >= (ctx.exact ? HOC_OPT_EXACT_STALL_SWEEPS : HOC_OPT_STALL_SWEEPS) && it < last) {
       last = it;
       cut = 1;
     }
@@ -1893,14 +1859,14 @@ sweeps:
        * aircraft at order 10, a red-green split of its 11 folds, exact
        * test from the start: 1 left in 53 sweeps without the raise, 2 in
        * 43 with it, its raises climbing to 53) */
-      if (!ctx.touched && ++stalled >= 3) {
-        ctx.eps = ctx.eps < 0.05 ? ctx.eps * 10 : 1e-3;
+      if (!ctx.touched && ++stalled >= HOC_OPT_EPS_STALL) {
+        ctx.eps = ctx.eps < HOC_OPT_EPS_RAISE_BELOW ? ctx.eps * HOC_OPT_EPS_RAISE : HOC_OPT_EPS;
         stalled = 0;
         memset(ctx.dirty, 1, mesh->n_elems); /* every delta changes */
         HOC_TRY_GOTO(hoc_opt_sweep_start(&ctx, &f, &qmin, &tangled), done);
       }
-    } else if (tangled < tangled_before && ctx.eps > 1e-3) {
-      ctx.eps = 1e-3;
+    } else if (tangled < tangled_before && ctx.eps > HOC_OPT_EPS) {
+      ctx.eps = HOC_OPT_EPS;
       stalled = 0;
       memset(ctx.dirty, 1, mesh->n_elems);
       HOC_TRY_GOTO(hoc_opt_sweep_start(&ctx, &f, &qmin, &tangled), done);
@@ -1929,12 +1895,13 @@ sweeps:
      * less than 5% and the worst element gained less than 0.005 (compared
      * with a tangled sweep, f is regularised and q is 0: no measure of
      * progress) */
-    hist_f[it % 11] = free_objective(&ctx, f);
-    hist_q[it % 11] = qmin;
+    int h = HOC_OPT_STAGNATION_SWEEPS + 1, now = it % h, then = (it - HOC_OPT_STAGNATION_SWEEPS) % h;
+    hist_f[now] = free_objective(&ctx, f);
+    hist_q[now] = qmin;
     if (tangled) since = it;
-    if (tangled == 0 && it - since > 10 &&
-        hist_f[(it - 10) % 11] - hist_f[it % 11] < 0.05 * hist_f[(it - 10) % 11] &&
-        qmin - hist_q[(it - 10) % 11] < 0.005) {
+    if (tangled == 0 && it - since > HOC_OPT_STAGNATION_SWEEPS &&
+        hist_f[then] - hist_f[now] < HOC_OPT_STAGNATION_F * hist_f[then] &&
+        qmin - hist_q[then] < HOC_OPT_STAGNATION_Q) {
       res.converged = 1;
       break;
     }
@@ -1969,11 +1936,11 @@ sweeps:
       fewest = tangled;
       res.converged = 0;
       ctx.relax_uv = 0;
-      ctx.eps = 1e-3;
+      ctx.eps = HOC_OPT_EPS;
       stalled = 0;
       since = fell = it;
       cut = 0;
-      last = it + (o.max_iterations + 1) / 2;
+      last = it + HOC_OPT_LATER_SWEEPS(o.max_iterations);
       goto sweeps; /* (each sweep wakes the nodes around the folds) */
     }
   }
@@ -1992,11 +1959,11 @@ sweeps:
          * search barely valid) */
         smoothing = 1;
         res.converged = 0;
-        ctx.eps = 1e-3;
+        ctx.eps = HOC_OPT_EPS;
         stalled = 0;
         since = fell = it;
         cut = 0;
-        last = it + (o.max_iterations + 1) / 2;
+        last = it + HOC_OPT_LATER_SWEEPS(o.max_iterations);
         hoc_opt_wake_all(&ctx);
         goto sweeps;
       }
@@ -2041,7 +2008,7 @@ hoc_status hoc_mesh_optimize(hoc_mesh *mesh, const hoc_optimize_options *options
    * 0.4-4 s of the first), and `hocad` splits what is left anyway. Not in
    * a local repair (free_elements): it runs the exact test from its first
    * sweep, as a protected run would, so that run would only repeat it. */
-  if (status == HOC_OK && a.tangled_final && !limited && mesh->order <= PROTECT_MAX_ORDER &&
+  if (status == HOC_OK && a.tangled_final && !limited && mesh->order <= HOC_OPT_PROTECT_MAX_ORDER &&
       !(options && options->free_elements)) {
     status = hoc_opt_snapshot_take(&first, mesh, a.tangled_final, a.objective_final);
     if (status == HOC_OK) {
@@ -2128,7 +2095,7 @@ hoc_status hoc_mesh_check_gradient(hoc_mesh *mesh, hoc_measure measure, int fix_
       const double *dz = ctx.dz + 6 * k + 3 * dd;
       double speed = sqrt(dz[0] * dz[0] + dz[1] * dz[1] + dz[2] * dz[2]);
       if (!(speed > 0)) continue;
-      double h = 1e-5 * ctx.hsize[k] / speed, gd = scr->g[d];
+      double h = HOC_OPT_FD_STEP * ctx.hsize[k] / speed, gd = scr->g[d];
       /* fourth-order central difference */
       double fp, fm, fp2, fm2;
       HOC_TRY_GOTO(block_f_at(&ctx, b, d, h, scr, &fp), done);
