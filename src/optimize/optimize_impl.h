@@ -1,6 +1,47 @@
 /* Internals of the optimiser (hoc_mesh_optimize, hoc_mesh_polish,
- * hoc_mesh_check_gradient): its state, the block families and the
- * functions its files share.
+ * hoc_mesh_check_gradient): simultaneous untangling and smoothing in
+ * parametric coordinates (the paper's Section 4).
+ *
+ * Objective: f(z) = sum_e sum_q r_eq^2, r_eq = sqrt(w_q) (eta(x~_q) - 1), the
+ * quadrature of sum_e int_{t_I} (eta - 1)^2 (weights normalised per element),
+ * with sigma replaced by sigma_delta = (sigma + sqrt(sigma^2 + 4 delta_e^2))/2
+ * on tangled elements and their neighbours (Escobar et al.), where the
+ * nodes also count as sample points (Definition 2 asks det > 0 there).
+ * Unknowns z: (u, v) of face-interior nodes, t of nodes on CAD curves.
+ * Positions x(z) = phi(u, v) or c(t) are always CAD evaluations.
+ *
+ * Solver: nonlinear block Gauss-Seidel. Each sweep visits the natural
+ * blocks of the high-order mesh: each vertex of the linear mesh (a
+ * face-interior vertex carries the high-order nodes of its star along,
+ * displaced in (u,v) by their barycentric weight, so the star moves as a
+ * whole), the nodes inside each element edge, and the nodes inside each
+ * element; then every free node on its own (the two families reach
+ * different places: blocks untangle high orders, single nodes let curve
+ * vertices slide where a block's compromise stalls). A block takes a damped
+ * Gauss-Newton step on the elements it touches (a small dense system),
+ * followed by a backtracking line search that rejects any step that tangles
+ * a valid element, folds an element in the parameter plane (so no node
+ * leaves its face's domain) or reorders nodes along a curve. Blocks are
+ * coloured so that blocks of a colour touch no common element: they are
+ * updated in parallel and the result does not depend on the thread count.
+ * A block whose step lowers f by less than a small share of f goes to
+ * sleep; the iteration ends when every block sleeps.
+ *
+ * Two phases: the tangle test first looks at samples (quadrature points,
+ * nodes, the order-2p lattice); once they say untangled, the exact fold
+ * tests of measuring (Bernstein coefficients, quality.h) may still find
+ * folds between them, and the sweeps go on with the exact test in every
+ * verdict, residuals at dense edge points, and in each element that only
+ * the exact tests find folded a residual at the point where they found
+ * sigma < 0 (phases.c).
+ *
+ * Files: setup.c (adjacency, unknowns, state), blocks.c (block families,
+ * carried nodes, colours, queues), objective.c (element residuals, the
+ * state at a sweep's start, screening), trial.c (trial parameters, CAD
+ * evaluation, commit), step.c (block model, damped solve, line search of a
+ * colour), phases.c (a run: its sweeps and phases), polish.c, driver.c
+ * (hoc_mesh_optimize, the protected run, snapshots), gradcheck.c;
+ * tunables.h holds every threshold.
  * SPDX-License-Identifier: GPL-2.0-or-later
  */
 #ifndef HOC_OPTIMIZE_IMPL_H
