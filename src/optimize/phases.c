@@ -39,295 +39,412 @@ static size_t mark_fragile(hoc_opt *o) {
   return n;
 }
 
+/* The phases of a run, in order. The sweeping phases share one loop of
+ * sweeps (run_sweeps) and differ in the state they start from; what
+ * follows each is chosen by end_sweeps and polish_phase.
+ *   SAMPLED         the first sweeps: the tangle test looks at samples
+ *                   (quadrature points, nodes, the order-2p lattice). A
+ *                   local repair (free_elements) tests exactly from here on.
+ *   SECOND_ATTEMPT  the sweeps of an attempt ran out, or stalled, with
+ *                   elements still tangled: half as many sweeps again from
+ *                   the best state reached, the (u, v) rule relaxed too
+ *                   (relaxed_uv in step.c). At most once per sweeping phase.
+ *   EXACT           the samples' verdict is in, but the exact fold tests of
+ *                   measuring find more elements tangled: sweeps with the
+ *                   exact tests in every verdict and dense edge residuals.
+ *   POLISH          the pattern search (polish.c) on the few folds left.
+ *   SMOOTHING       the polish left none tangled: sweeps that keep every
+ *                   element valid smooth its barely valid patches. Once.
+ *   DONE */
+typedef enum phase {
+  PHASE_SAMPLED,
+  PHASE_SECOND_ATTEMPT,
+  PHASE_EXACT,
+  PHASE_POLISH,
+  PHASE_SMOOTHING,
+  PHASE_DONE
+} phase;
+
+/* The state of a run (hoc_opt_run). */
+typedef struct run {
+  hoc_opt ctx;
+  hoc_mesh *mesh;
+  hoc_optimize_options opts; /* the caller's, defaults filled in */
+  hoc_opt_scratch *scr;      /* [nthreads] */
+  int nthreads;
+  int it0;                   /* sweeps are numbered from it0 + 1 ... */
+  double t0;                 /* ... and seconds counted from t0 */
+  hoc_optimize_result res;
+  int limited;               /* the sampled phase used all its sweeps, elements still tangled */
+  hoc_opt_snapshot best;     /* the state with the fewest tangled elements */
+  hoc_opt_snapshot pre;      /* the state before the polish */
+  double f, qmin;            /* objective and smallest q at the last sweep_start */
+  size_t tangled;            /* tangled elements at the last sweep_start */
+  size_t fewest;             /* fewest tangled so far (res.best_iteration: when) */
+  int it;                    /* the last sweep number used */
+  int last;                  /* the last sweep of this attempt */
+  int since;                 /* the sweep before the mesh's run of untangled sweeps began
+                                (or this attempt did) */
+  int fell;                  /* the last sweep of this attempt with a new fewest tangled */
+  int stalled;               /* sweeps in a row without fewer tangled (the delta cycle) */
+  int cut;                   /* this attempt was ended before its sweeps ran out */
+  int smoothing;             /* the smoothing phase has begun */
+  /* free part of f and smallest q of the last sweeps, at [sweep % size] */
+  double hist_f[HOC_OPT_STAGNATION_SWEEPS + 1], hist_q[HOC_OPT_STAGNATION_SWEEPS + 1];
+} run;
+
+/* The sweeps of a new attempt, after sweep r->it: up to `sweeps` of them. */
+static void new_attempt(run *r, int sweeps) {
+  r->stalled = 0;
+  r->since = r->fell = r->it;
+  r->cut = 0;
+  r->last = r->it + sweeps;
+}
+
+/* Every element's state again at the next sweep_start. */
+static hoc_status restart_state(run *r) {
+  memset(r->ctx.dirty, 1, r->mesh->n_elems);
+  return hoc_opt_sweep_start(&r->ctx, &r->f, &r->qmin, &r->tangled);
+}
+
+/* The mesh as in snapshot s, and every element's state from it. */
+static hoc_status restore(run *r, const hoc_opt_snapshot *s) {
+  hoc_opt_snapshot_restore(s, r->mesh);
+  HOC_TRY(hoc_opt_eval_all(&r->ctx));
+  return restart_state(r);
+}
+
+/* The run's start: every free node awake, the initial tangled count by the
+ * exact test (as measuring counts), fragile elements, then the sampled
+ * phase's state. A local repair (free_elements) has no sampled phase: it
+ * repairs a few folds, and counted at the samples it settles on states
+ * the exact test still finds folded. */
+static hoc_status begin(run *r) {
+  hoc_opt *o = &r->ctx;
+  r->best.tangled = SIZE_MAX;
+  for (size_t i = 0; i < r->mesh->n_nodes; ++i) {
+    o->active[i] = o->ndof[i] > 0;
+    r->res.free_nodes += o->ndof[i] > 0;
+  }
+  hoc_opt_wake_all(o);
+  o->exact = 1;
+  HOC_TRY(hoc_opt_sweep_start(o, &r->f, &r->qmin, &r->tangled));
+  r->res.tangled_initial = r->tangled;
+  r->res.fragile = mark_fragile(o);
+  o->exact = o->touched != NULL;
+  HOC_TRY(restart_state(r));
+  r->res.objective_initial = r->f;
+  r->fewest = r->tangled;
+  if (r->tangled) HOC_TRY(hoc_opt_snapshot_take(&r->best, r->mesh, r->tangled, r->f));
+  r->it = r->it0;
+  r->res.best_iteration = r->it0;
+  new_attempt(r, r->opts.max_iterations);
+  return HOC_OK;
+}
+
+/* Wakes the nodes of element e that may move. */
+static void wake_element(run *r, size_t e) {
+  hoc_opt *o = &r->ctx;
+  for (int i = 0; i < o->np; ++i) {
+    size_t node = r->mesh->conn[e * (size_t)o->np + (size_t)i];
+    if (o->ndof[node]) hoc_opt_wake_node(o, node);
+  }
+}
+
+/* One sweep (number r->it): who may move, then every colour of the
+ * natural blocks and of the single nodes. *moved: nodes moved. */
+static hoc_status sweep(run *r, size_t *moved) {
+  hoc_opt *o = &r->ctx;
+  hoc_mesh *mesh = r->mesh;
+  *moved = 0;
+  int local = o->exact && r->tangled;
+  if (local) hoc_opt_mark_near(o);
+  else if (o->local) hoc_opt_wake_all(o); /* the nodes left awake elsewhere */
+  o->local = local;
+  /* nodes near tangled elements and nodes of poor elements (those that set
+   * the mesh's worst quality) never sleep */
+  double qmean = 0;
+  for (size_t e = 0; e < mesh->n_elems; ++e) qmean += o->qe[e];
+  qmean /= (double)(mesh->n_elems ? mesh->n_elems : 1);
+  for (size_t e = 0; e < mesh->n_elems; ++e)
+    if (o->region[e] || o->qe[e] < HOC_OPT_POOR_Q_SHARE * qmean) wake_element(r, e);
+  /* a step worth less than a small share of the average node's part of f
+   * puts its block to sleep */
+  o->min_gain = r->opts.tolerance * free_objective(o, r->f) /
+                (double)(r->res.free_nodes ? r->res.free_nodes : 1);
+  o->wake_factor = r->tangled ? HOC_OPT_WAKE_UNTANGLING : HOC_OPT_WAKE_SMOOTHING;
+  if (r->it == r->it0 + 1) {
+    HOC_TRY(hoc_opt_screen(o));
+    hoc_opt_wake_all(o);
+    for (size_t e = 0; e < mesh->n_elems; ++e)
+      if (o->qe[e] < HOC_OPT_POOR_Q_SHARE * qmean) wake_element(r, e);
+  }
+  /* the natural blocks, then every node on its own */
+  for (int fam = 0; fam < 2; ++fam) {
+    o->B = &o->fam[fam];
+    for (int c = 0; c < o->B->n_colors; ++c) {
+      size_t mc;
+      HOC_TRY(hoc_opt_do_color(o, c, r->scr, r->nthreads, &mc));
+      *moved += mc;
+    }
+  }
+  o->B = &o->fam[0];
+  return HOC_OK;
+}
+
+/* After a sweep's sweep_start: the fewest tangled and the best state, the
+ * stall rule, and the regularisation's cycle (tunables.h). */
+static hoc_status after_sweep(run *r, size_t tangled_before) {
+  hoc_opt *o = &r->ctx;
+  r->res.iterations = r->it;
+  if (r->tangled < r->fewest) {
+    r->fewest = r->tangled;
+    r->res.best_iteration = r->fell = r->it;
+  }
+  int stall = o->exact ? HOC_OPT_EXACT_STALL_SWEEPS : HOC_OPT_STALL_SWEEPS;
+  if (r->tangled && r->it - r->fell >= stall && r->it < r->last) {
+    r->last = r->it;
+    r->cut = 1;
+  }
+  if (r->tangled && r->tangled < r->best.tangled)
+    HOC_TRY(hoc_opt_snapshot_take(&r->best, r->mesh, r->tangled, r->f));
+  /* untangling that stalls: the next delta of the cycle; back to the
+   * smallest as soon as it moves on. Not in a local repair
+   * (free_elements): there the relaxed region folds more than it opens,
+   * and the count comes back no lower. */
+  if (r->tangled && r->tangled >= tangled_before) {
+    if (!o->touched && ++r->stalled >= HOC_OPT_EPS_STALL) {
+      o->eps = o->eps < HOC_OPT_EPS_RAISE_BELOW ? o->eps * HOC_OPT_EPS_RAISE : HOC_OPT_EPS;
+      r->stalled = 0;
+      HOC_TRY(restart_state(r)); /* every delta changes */
+    }
+  } else if (r->tangled < tangled_before && o->eps > HOC_OPT_EPS) {
+    o->eps = HOC_OPT_EPS;
+    r->stalled = 0;
+    HOC_TRY(restart_state(r));
+  } else {
+    r->stalled = 0;
+  }
+  return HOC_OK;
+}
+
+/* Records this sweep's free f and smallest q; 1 if smoothing stagnates
+ * (tunables.h). Compared with a tangled sweep, f is regularised and q is
+ * 0: no measure of progress, so only untangled sweeps count. */
+static int stagnated(run *r) {
+  int size = HOC_OPT_STAGNATION_SWEEPS + 1, now = r->it % size,
+      then = (r->it - HOC_OPT_STAGNATION_SWEEPS) % size;
+  r->hist_f[now] = free_objective(&r->ctx, r->f);
+  r->hist_q[now] = r->qmin;
+  if (r->tangled) r->since = r->it;
+  return r->tangled == 0 && r->it - r->since > HOC_OPT_STAGNATION_SWEEPS &&
+         r->hist_f[then] - r->hist_f[now] < HOC_OPT_STAGNATION_F * r->hist_f[then] &&
+         r->qmin - r->hist_q[then] < HOC_OPT_STAGNATION_Q;
+}
+
+/* The sweeps of a sweeping phase until they end: *used_up when the
+ * attempt's sweeps ran out or the stall rule cut them short, else nothing
+ * moves any more or smoothing stagnated. */
+static hoc_status run_sweeps(run *r, int *used_up) {
+  hoc_opt *o = &r->ctx;
+  *used_up = 0;
+  for (;;) {
+    if (r->it >= r->last) {
+      *used_up = 1;
+      return HOC_OK;
+    }
+    ++r->it;
+    size_t moved, tangled_before = r->tangled;
+    HOC_TRY(sweep(r, &moved));
+    HOC_TRY(hoc_opt_sweep_start(o, &r->f, &r->qmin, &r->tangled));
+    HOC_TRY(after_sweep(r, tangled_before));
+    if (r->opts.progress) {
+      hoc_optimize_iteration info = {r->it,  r->f,  r->qmin,
+                                     r->tangled, moved, hoc_opt_now() - r->t0,
+                                     1 + o->relax_uv};
+      if (r->opts.progress(r->opts.progress_user, &info))
+        return HOC_ERROR(HOC_ERR_INTERRUPTED, "optimisation interrupted");
+    }
+    size_t active = 0;
+    for (size_t i = 0; i < r->mesh->n_nodes; ++i) active += o->active[i];
+    if (!active || !moved) {
+      r->res.converged = r->tangled == 0;
+      if (r->tangled && !o->relax_uv && !o->touched) {
+        r->last = r->it; /* used up: the second attempt */
+        r->cut = 1;
+        continue;
+      }
+      return HOC_OK;
+    }
+    if (stagnated(r)) {
+      r->res.converged = 1;
+      return HOC_OK;
+    }
+  }
+}
+
+/* The second attempt, if the sweeps ran out with elements still tangled
+ * and none was made in this phase: from the best state reached, with the
+ * (u, v) rule relaxed too. Not in a local repair: its regularisation is
+ * never raised, so nothing is relaxed and a second attempt would only go
+ * over the first one's ground again. *started: whether it was. */
+static hoc_status second_attempt(run *r, int *started) {
+  hoc_opt *o = &r->ctx;
+  *started = r->tangled && !o->relax_uv && r->best.tangled != SIZE_MAX && !o->touched;
+  if (!*started) return HOC_OK;
+  o->relax_uv = 1;
+  o->eps = HOC_OPT_EPS;
+  new_attempt(r, HOC_OPT_LATER_SWEEPS(r->opts.max_iterations));
+  hoc_opt_wake_all(o);
+  HOC_TRY(restore(r, &r->best));
+  r->res.second_attempt = r->it + 1;
+  return HOC_OK;
+}
+
+/* The exact phase, if the exact fold tests find more elements tangled
+ * than the samples did: an optimiser that keeps sigma > 0 at samples can
+ * pinch an edge between two, and on coarse meshes the samples may see a
+ * few folds where the exact tests find many. Not after sweeps cut short by
+ * max_iterations with elements still tangled by samples: the caller asked
+ * for no more. Not from the start: the exact tests block steps through
+ * states that fold between samples on the way to a better mesh (on thin
+ * parts, a markedly lower final quality). *next: PHASE_EXACT or
+ * PHASE_POLISH. */
+static hoc_status exact_phase(run *r, phase *next) {
+  hoc_opt *o = &r->ctx;
+  o->exact = 1;
+  size_t sampled = r->tangled;
+  r->limited = r->res.stopped_at_limit;
+  HOC_TRY(restart_state(r));
+  *next = PHASE_POLISH;
+  if (!(r->tangled > sampled && (!sampled || !r->res.stopped_at_limit))) return HOC_OK;
+  r->res.exact_phase = r->it + 1;
+  HOC_TRY(hoc_opt_snapshot_take(&r->best, r->mesh, r->tangled, r->f));
+  r->fewest = r->tangled;
+  r->res.converged = 0;
+  o->relax_uv = 0;
+  o->eps = HOC_OPT_EPS;
+  new_attempt(r, HOC_OPT_LATER_SWEEPS(r->opts.max_iterations));
+  *next = PHASE_EXACT; /* (each sweep wakes the nodes around the folds) */
+  return HOC_OK;
+}
+
+/* A sweeping phase's sweeps ended (used_up: ran out): the second attempt,
+ * or the best state if the last has more tangled, then the exact phase or
+ * the polish. */
+static hoc_status end_sweeps(run *r, int used_up, phase *next) {
+  if (used_up) {
+    int started;
+    HOC_TRY(second_attempt(r, &started));
+    if (started) {
+      *next = PHASE_SECOND_ATTEMPT;
+      return HOC_OK;
+    }
+    r->res.stopped_at_limit = r->tangled && !r->cut;
+    ++r->it; /* (the number of the sweep that found the sweeps used up is not reused) */
+  }
+  if (r->best.tangled != SIZE_MAX && r->tangled > r->best.tangled)
+    HOC_TRY(restore(r, &r->best)); /* more tangled than once: the best state reached */
+  if (!r->ctx.exact) return exact_phase(r, next);
+  *next = PHASE_POLISH;
+  return HOC_OK;
+}
+
+/* The few folds the sweeps leave: the polish (not when the sweeps ran out:
+ * max_iterations asked for no more), kept if it untangles some, and the
+ * smoothing after it if it untangles all (once). *next: PHASE_SMOOTHING or
+ * PHASE_DONE. */
+static hoc_status polish_phase(run *r, phase *next) {
+  hoc_opt *o = &r->ctx;
+  *next = PHASE_DONE;
+  if (!(r->tangled && o->exact && !r->res.stopped_at_limit)) return HOC_OK;
+  size_t before = r->tangled;
+  HOC_TRY(hoc_opt_snapshot_take(&r->pre, r->mesh, r->tangled, r->f));
+  HOC_TRY(hoc_opt_polish(o));
+  HOC_TRY(hoc_opt_sweep_start(o, &r->f, &r->qmin, &r->tangled));
+  if (r->tangled >= before) /* none untangled: the sweeps' state, whose shapes are better */
+    return restore(r, &r->pre);
+  r->res.polished += before - r->tangled;
+  if (r->tangled || r->smoothing) return HOC_OK;
+  /* all valid now: sweeps again, which keep every element valid, smooth
+   * the polished patches (their elements come out of the search barely
+   * valid) */
+  r->smoothing = 1;
+  r->res.converged = 0;
+  o->eps = HOC_OPT_EPS;
+  new_attempt(r, HOC_OPT_LATER_SWEEPS(r->opts.max_iterations));
+  hoc_opt_wake_all(o);
+  *next = PHASE_SMOOTHING;
+  return HOC_OK;
+}
+
 /* One run of the optimiser from the mesh as it is (see hoc_mesh_optimize);
  * its sweeps are numbered from it0 + 1, its seconds from t0; *limited:
- * its first phase used all its sweeps with elements still tangled. */
-hoc_status hoc_opt_run(hoc_mesh *mesh, const hoc_optimize_options *options, int protect,
-                               int it0, double t0, hoc_optimize_result *result, int *limited) {
+ * its sampled phase used all its sweeps with elements still tangled. */
+hoc_status hoc_opt_run(hoc_mesh *mesh, const hoc_optimize_options *options, int protect, int it0,
+                       double t0, hoc_optimize_result *result, int *limited) {
   *limited = 0;
-  hoc_optimize_options o;
-  hoc_optimize_options_default(&o);
-  if (options) o = *options;
-  if (o.max_iterations <= 0) o.max_iterations = HOC_OPT_DEFAULT_MAX_ITERATIONS;
-  if (!(o.tolerance > 0)) o.tolerance = HOC_OPT_DEFAULT_TOLERANCE;
-  HOC_CHECK(o.measure == HOC_MEASURE_SHAPE || o.measure == HOC_MEASURE_ODDY, HOC_ERR_ARGUMENT,
-            "unknown distortion measure %d", (int)o.measure);
-  HOC_CHECK(o.max_iterations <= HOC_OPT_MAX_ITERATIONS_LIMIT, HOC_ERR_ARGUMENT, "too many iterations requested");
-  HOC_CHECK(isfinite(o.tolerance), HOC_ERR_ARGUMENT, "tolerance must be a finite number");
-  HOC_CHECK(o.free_rings >= 0, HOC_ERR_ARGUMENT, "free_rings must not be negative");
-  hoc_opt ctx = {0};
-  hoc_opt_scratch *scr = NULL;
-  int nthreads = omp_get_max_threads();
+  hoc_optimize_options opts;
+  hoc_optimize_options_default(&opts);
+  if (options) opts = *options;
+  if (opts.max_iterations <= 0) opts.max_iterations = HOC_OPT_DEFAULT_MAX_ITERATIONS;
+  if (!(opts.tolerance > 0)) opts.tolerance = HOC_OPT_DEFAULT_TOLERANCE;
+  HOC_CHECK(opts.measure == HOC_MEASURE_SHAPE || opts.measure == HOC_MEASURE_ODDY,
+            HOC_ERR_ARGUMENT, "unknown distortion measure %d", (int)opts.measure);
+  HOC_CHECK(opts.max_iterations <= HOC_OPT_MAX_ITERATIONS_LIMIT, HOC_ERR_ARGUMENT,
+            "too many iterations requested");
+  HOC_CHECK(isfinite(opts.tolerance), HOC_ERR_ARGUMENT, "tolerance must be a finite number");
+  HOC_CHECK(opts.free_rings >= 0, HOC_ERR_ARGUMENT, "free_rings must not be negative");
+  run *r = hoc_calloc(1, sizeof *r);
+  HOC_CHECK(r, HOC_ERR_MEMORY, "out of memory");
+  r->mesh = mesh;
+  r->opts = opts;
+  r->nthreads = omp_get_max_threads();
+  r->it0 = it0;
+  r->t0 = t0;
+  hoc_opt *o = &r->ctx;
   /* every node on the CAD from the start (a mesh read as written may have
    * nodes off the surface) */
   hoc_status status = hoc_mesh_update_xyz(mesh);
   if (status == HOC_OK) mesh->off_cad = 0;
   if (status == HOC_OK)
-    status = hoc_opt_setup(&ctx, mesh, o.measure, o.fix_curves, o.free_elements, o.free_rings);
-  ctx.protect = protect; /* (setup clears ctx) */
-  if (status == HOC_OK) status = hoc_opt_eval_all(&ctx);
-  if (status == HOC_OK) status = hoc_opt_scratch_alloc(&ctx, nthreads, &scr);
+    status = hoc_opt_setup(o, mesh, opts.measure, opts.fix_curves, opts.free_elements,
+                           opts.free_rings);
+  o->protect = protect; /* (setup clears the state) */
+  if (status == HOC_OK) status = hoc_opt_eval_all(o);
+  if (status == HOC_OK) status = hoc_opt_scratch_alloc(o, r->nthreads, &r->scr);
   if (status != HOC_OK) {
-    hoc_opt_scratch_free(scr, nthreads);
-    hoc_opt_free(&ctx);
+    hoc_opt_scratch_free(r->scr, r->nthreads);
+    hoc_opt_free(o);
+    free(r);
     return status;
   }
-  hoc_optimize_result res = {0};
-  hoc_opt_snapshot best = {0}, pre = {0}; /* pre: the state before the polish */
-  best.tangled = SIZE_MAX;
-  for (size_t i = 0; i < mesh->n_nodes; ++i) {
-    ctx.active[i] = ctx.ndof[i] > 0;
-    res.free_nodes += ctx.ndof[i] > 0;
-  }
-  hoc_opt_wake_all(&ctx);
-  double f, qmin;
-  size_t tangled;
-  /* the initial tangled count by the exact test (as measuring counts),
-   * then the first phase's sampled state */
-  ctx.exact = 1;
-  HOC_TRY_GOTO(hoc_opt_sweep_start(&ctx, &f, &qmin, &tangled), done);
-  res.tangled_initial = tangled;
-  res.fragile = mark_fragile(&ctx);
-  /* the first phase counts at the samples; a local repair (free_elements)
-   * has no first phase: its few folds are counted by the exact test from
-   * the start (the aircraft at order 10, a red-green split of its 11 folds:
-   * 32 -> 1 so, where 32 -> 2 at the samples became 26 by the exact test
-   * and went no lower than 11 in the exact phase) */
-  ctx.exact = ctx.touched != NULL;
-  memset(ctx.dirty, 1, mesh->n_elems);
-  HOC_TRY_GOTO(hoc_opt_sweep_start(&ctx, &f, &qmin, &tangled), done);
-  res.objective_initial = f;
-  size_t fewest = tangled; /* and res.best_iteration = 0: when it was reached */
-  if (tangled) HOC_TRY_GOTO(hoc_opt_snapshot_take(&best, mesh, tangled, f), done);
-  /* last: the last sweep of this attempt; since: the sweep before the
-   * mesh's run of untangled sweeps (or the second attempt) began */
-  int stalled = 0, last = it0 + o.max_iterations, since = it0;
-  int fell = it0; /* the last sweep of this attempt with a new fewest tangled */
-  int smoothing = 0; /* sweeps after a polish that left none tangled */
-  int cut = 0;  /* this attempt was ended before its sweeps ran out */
-  double hist_f[HOC_OPT_STAGNATION_SWEEPS + 1], hist_q[HOC_OPT_STAGNATION_SWEEPS + 1];
-  int it = it0;
-  res.best_iteration = it0;
-sweeps:
-  for (;;) {
-    ++it;
-    if (it > last) {
-      /* still tangled when the sweeps run out (or nothing moves): a second
-       * attempt of half as many sweeps from the best state reached, with
-       * the (u, v) rule relaxed too (relaxed_uv). Not in a local repair:
-       * its regularisation is never raised, so nothing is relaxed and the
-       * second attempt would only go over the first one's ground again
-       * (the aircraft at order 10: sweeps 39-53 of a red-green split's
-       * repair, no fewer tangled) */
-      if (!tangled || ctx.relax_uv || best.tangled == SIZE_MAX || ctx.touched) {
-        res.stopped_at_limit = tangled && !cut;
-        break;
-      }
-      hoc_opt_snapshot_restore(&best, mesh);
-      HOC_TRY_GOTO(hoc_opt_eval_all(&ctx), done);
-      ctx.relax_uv = 1;
-      ctx.eps = HOC_OPT_EPS;
-      stalled = 0;
-      since = fell = it - 1;
-      cut = 0;
-      last = it - 1 + HOC_OPT_LATER_SWEEPS(o.max_iterations);
-      memset(ctx.dirty, 1, mesh->n_elems);
-      hoc_opt_wake_all(&ctx);
-      HOC_TRY_GOTO(hoc_opt_sweep_start(&ctx, &f, &qmin, &tangled), done);
-      res.second_attempt = it;
-    }
-    size_t moved = 0;
-    int local = ctx.exact && tangled;
-    if (local) hoc_opt_mark_near(&ctx);
-    else if (ctx.local) hoc_opt_wake_all(&ctx); /* the nodes left awake elsewhere */
-    ctx.local = local;
-    /* nodes near tangled elements and nodes of poor elements (q below half
-     * the mean: those that set the mesh's worst quality) never sleep */
-    double qmean = 0;
-    for (size_t e = 0; e < mesh->n_elems; ++e) qmean += ctx.qe[e];
-    qmean /= (double)(mesh->n_elems ? mesh->n_elems : 1);
-    for (size_t e = 0; e < mesh->n_elems; ++e)
-      if (ctx.region[e] || ctx.qe[e] < HOC_OPT_POOR_Q_SHARE * qmean)
-        for (int i = 0; i < ctx.np; ++i) {
-          size_t node = mesh->conn[e * (size_t)ctx.np + (size_t)i];
-          if (ctx.ndof[node]) hoc_opt_wake_node(&ctx, node);
-        }
-    /* a step worth less than a small share of the average node's part of f
-     * puts its block to sleep */
-    ctx.min_gain =
-        o.tolerance * free_objective(&ctx, f) / (double)(res.free_nodes ? res.free_nodes : 1);
-    /* while untangling, every move wakes its neighbourhood (room is made by
-     * moving nodes further out); then only significant ones do */
-    ctx.wake_factor = tangled ? HOC_OPT_WAKE_UNTANGLING : HOC_OPT_WAKE_SMOOTHING;
-    if (it == it0 + 1) {
-      HOC_TRY_GOTO(hoc_opt_screen(&ctx), done);
-      hoc_opt_wake_all(&ctx);
-      for (size_t e = 0; e < mesh->n_elems; ++e)
-        if (ctx.qe[e] < HOC_OPT_POOR_Q_SHARE * qmean)
-          for (int i = 0; i < ctx.np; ++i) {
-            size_t node = mesh->conn[e * (size_t)ctx.np + (size_t)i];
-            if (ctx.ndof[node]) hoc_opt_wake_node(&ctx, node);
-          }
-    }
-    /* the natural blocks, then every node on its own */
-    for (int fam = 0; fam < 2; ++fam) {
-      ctx.B = &ctx.fam[fam];
-      for (int c = 0; c < ctx.B->n_colors; ++c) {
-        size_t mc;
-        HOC_TRY_GOTO(hoc_opt_do_color(&ctx, c, scr, nthreads, &mc), done);
-        moved += mc;
-      }
-    }
-    ctx.B = &ctx.fam[0];
-    size_t tangled_before = tangled;
-    HOC_TRY_GOTO(hoc_opt_sweep_start(&ctx, &f, &qmin, &tangled), done);
-    res.iterations = it;
-    if (tangled < fewest) {
-      fewest = tangled;
-      res.best_iteration = fell = it;
-    }
-    /* no new fewest for HOC_OPT_STALL_SWEEPS sweeps: this attempt ends (the count
-     * has been seen to fall again after 32 on t20 at order 10) */
-    if (tangled && it - fell >= (ctx.exact ? HOC_OPT_EXACT_STALL_SWEEPS : HOC_OPT_STALL_SWEEPS) && it < last) {
-      last = it;
-      cut = 1;
-    }
-    if (tangled && tangled < best.tangled)
-      HOC_TRY_GOTO(hoc_opt_snapshot_take(&best, mesh, tangled, f), done);
-    /* untangling that stalls: a smoother regularised landscape (larger
-     * delta) for a while; back to the small one as soon as it moves on */
-    if (tangled && tangled >= tangled_before) {
-      /* cycle 1e-3 -> 1e-2 -> 1e-1 -> 1e-3: a large delta smooths the
-       * landscape, a small one pushes the last folds open (in the exact
-       * phase too: the analytic cylinder's corner folds open only so) */
-      /* Not in a local repair (free_elements): there the relaxed region
-       * folds more than it opens and the count comes back no lower (the
-       * aircraft at order 10, a red-green split of its 11 folds, exact
-       * test from the start: 1 left in 53 sweeps without the raise, 2 in
-       * 43 with it, its raises climbing to 53) */
-      if (!ctx.touched && ++stalled >= HOC_OPT_EPS_STALL) {
-        ctx.eps = ctx.eps < HOC_OPT_EPS_RAISE_BELOW ? ctx.eps * HOC_OPT_EPS_RAISE : HOC_OPT_EPS;
-        stalled = 0;
-        memset(ctx.dirty, 1, mesh->n_elems); /* every delta changes */
-        HOC_TRY_GOTO(hoc_opt_sweep_start(&ctx, &f, &qmin, &tangled), done);
-      }
-    } else if (tangled < tangled_before && ctx.eps > HOC_OPT_EPS) {
-      ctx.eps = HOC_OPT_EPS;
-      stalled = 0;
-      memset(ctx.dirty, 1, mesh->n_elems);
-      HOC_TRY_GOTO(hoc_opt_sweep_start(&ctx, &f, &qmin, &tangled), done);
-    } else {
-      stalled = 0;
-    }
-    if (o.progress) {
-      hoc_optimize_iteration info = {it, f, qmin, tangled, moved, hoc_opt_now() - t0, 1 + ctx.relax_uv};
-      if (o.progress(o.progress_user, &info)) {
-        status = HOC_ERROR(HOC_ERR_INTERRUPTED, "optimisation interrupted");
-        goto done;
-      }
-    }
-    size_t active = 0;
-    for (size_t i = 0; i < mesh->n_nodes; ++i) active += ctx.active[i];
-    if (!active || !moved) {
-      res.converged = tangled == 0;
-      if (tangled && !ctx.relax_uv && !ctx.touched) {
-        last = it; /* the second attempt */
-        cut = 1;
-        continue;
-      }
+  status = begin(r);
+  phase ph = PHASE_SAMPLED;
+  while (status == HOC_OK && ph != PHASE_DONE) {
+    switch (ph) {
+    case PHASE_SAMPLED:
+    case PHASE_SECOND_ATTEMPT:
+    case PHASE_EXACT:
+    case PHASE_SMOOTHING: {
+      int used_up;
+      status = run_sweeps(r, &used_up);
+      if (status == HOC_OK) status = end_sweeps(r, used_up, &ph);
       break;
     }
-    /* stagnation: untangled for the last 10 sweeps, over which f fell by
-     * less than 5% and the worst element gained less than 0.005 (compared
-     * with a tangled sweep, f is regularised and q is 0: no measure of
-     * progress) */
-    int h = HOC_OPT_STAGNATION_SWEEPS + 1, now = it % h, then = (it - HOC_OPT_STAGNATION_SWEEPS) % h;
-    hist_f[now] = free_objective(&ctx, f);
-    hist_q[now] = qmin;
-    if (tangled) since = it;
-    if (tangled == 0 && it - since > HOC_OPT_STAGNATION_SWEEPS &&
-        hist_f[then] - hist_f[now] < HOC_OPT_STAGNATION_F * hist_f[then] &&
-        qmin - hist_q[then] < HOC_OPT_STAGNATION_Q) {
-      res.converged = 1;
-      break;
+    case PHASE_POLISH: status = polish_phase(r, &ph); break;
+    case PHASE_DONE: break;
     }
   }
-  if (best.tangled != SIZE_MAX && tangled > best.tangled) {
-    hoc_opt_snapshot_restore(&best, mesh); /* more tangled than once: the best state reached */
-    HOC_TRY_GOTO(hoc_opt_eval_all(&ctx), done);
-    memset(ctx.dirty, 1, mesh->n_elems);
-    HOC_TRY_GOTO(hoc_opt_sweep_start(&ctx, &f, &qmin, &tangled), done);
-  }
-  /* The second phase: the exact fold tests (hoc_element_folded) find
-   * folds between the samples (an optimiser that keeps sigma > 0 at samples
-   * can pinch an edge between two), whether or not the samples still see
-   * some elements tangled (gmsh's order-3 bottle: 3 by samples, 48 by the
-   * exact test; this phase leaves 11 where waiting for the samples to say
-   * 0 left the 48), unless the sweeps ran out. From
-   * here on the tangle test is exact, as measuring's, and the untangling
-   * residuals see the edges densely. Not from the start: there it blocks
-   * steps through states that fold between samples on the way to a better
-   * mesh (t20 at order 5 ended with min q 0.33 instead of 0.49). */
-  if (!ctx.exact) {
-    ctx.exact = 1;
-    memset(ctx.dirty, 1, mesh->n_elems);
-    size_t sampled = tangled;
-    *limited = res.stopped_at_limit;
-    HOC_TRY_GOTO(hoc_opt_sweep_start(&ctx, &f, &qmin, &tangled), done);
-    /* (not after sweeps cut short by --max-iterations with elements still
-     * tangled by samples: the caller asked for no more) */
-    if (tangled > sampled && (!sampled || !res.stopped_at_limit)) {
-      res.exact_phase = it + 1;
-      HOC_TRY_GOTO(hoc_opt_snapshot_take(&best, mesh, tangled, f), done);
-      fewest = tangled;
-      res.converged = 0;
-      ctx.relax_uv = 0;
-      ctx.eps = HOC_OPT_EPS;
-      stalled = 0;
-      since = fell = it;
-      cut = 0;
-      last = it + HOC_OPT_LATER_SWEEPS(o.max_iterations);
-      goto sweeps; /* (each sweep wakes the nodes around the folds) */
-    }
-  }
-  /* the few folds the sweeps leave: the polish (not when the sweeps ran
-   * out: --max-iterations asked for no more) */
-  if (tangled && ctx.exact && !res.stopped_at_limit) {
-    size_t before = tangled;
-    HOC_TRY_GOTO(hoc_opt_snapshot_take(&pre, mesh, tangled, f), done);
-    HOC_TRY_GOTO(hoc_opt_polish(&ctx), done);
-    HOC_TRY_GOTO(hoc_opt_sweep_start(&ctx, &f, &qmin, &tangled), done);
-    if (tangled < before) {
-      res.polished += before - tangled;
-      if (!tangled && !smoothing) {
-        /* all valid now: sweeps again, which keep every element valid,
-         * smooth the polished patches (their elements come out of the
-         * search barely valid) */
-        smoothing = 1;
-        res.converged = 0;
-        ctx.eps = HOC_OPT_EPS;
-        stalled = 0;
-        since = fell = it;
-        cut = 0;
-        last = it + HOC_OPT_LATER_SWEEPS(o.max_iterations);
-        hoc_opt_wake_all(&ctx);
-        goto sweeps;
-      }
-    } else { /* none untangled: the sweeps' state, whose shapes are better */
-      hoc_opt_snapshot_restore(&pre, mesh);
-      HOC_TRY_GOTO(hoc_opt_eval_all(&ctx), done);
-      memset(ctx.dirty, 1, mesh->n_elems);
-      HOC_TRY_GOTO(hoc_opt_sweep_start(&ctx, &f, &qmin, &tangled), done);
-    }
-  }
-done:
-  hoc_opt_snapshot_free(&pre);
-  hoc_opt_snapshot_free(&best);
-  res.objective_final = f;
-  res.tangled_final = tangled;
-  res.seconds = hoc_opt_now() - t0;
-  if (result) *result = res;
-  hoc_opt_scratch_free(scr, nthreads);
-  hoc_opt_free(&ctx);
+  hoc_opt_snapshot_free(&r->pre);
+  hoc_opt_snapshot_free(&r->best);
+  r->res.objective_final = r->f;
+  r->res.tangled_final = r->tangled;
+  r->res.seconds = hoc_opt_now() - t0;
+  if (result) *result = r->res;
+  *limited = r->limited;
+  hoc_opt_scratch_free(r->scr, r->nthreads);
+  hoc_opt_free(o);
+  free(r);
   return status;
 }
