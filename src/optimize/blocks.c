@@ -34,7 +34,7 @@ hoc_status hoc_opt_build_blocks(hoc_opt *o, int family) {
         const size_t *cn = m->conn + e * np;
         for (size_t k = 0; k < np; ++k) {
           size_t i = cn[k];
-          if (!o->ndof[i] || B->node_block[i] != SIZE_MAX) continue;
+          if (!o->adj.ndof[i] || B->node_block[i] != SIZE_MAX) continue;
           B->node_block[i] = start.n;
           HOC_TRY_GOTO(hoc_grow_push(&start, nodes.n), done);
           HOC_TRY_GOTO(hoc_grow_push(&nodes, i), done);
@@ -45,7 +45,7 @@ hoc_status hoc_opt_build_blocks(hoc_opt *o, int family) {
       if (kind == 0) {
         for (int k = 0; k < 3; ++k) {
           size_t i = cn[k];
-          if (!o->ndof[i] || B->node_block[i] != SIZE_MAX) continue;
+          if (!o->adj.ndof[i] || B->node_block[i] != SIZE_MAX) continue;
           B->node_block[i] = start.n;
           HOC_TRY_GOTO(hoc_grow_push(&start, nodes.n), done);
           HOC_TRY_GOTO(hoc_grow_push(&nodes, i), done);
@@ -56,7 +56,7 @@ hoc_status hoc_opt_build_blocks(hoc_opt *o, int family) {
           size_t first = nodes.n;
           for (int j = 0; j < p - 1; ++j) {
             size_t i = cn[3 + k * (p - 1) + j];
-            if (!o->ndof[i] || B->node_block[i] != SIZE_MAX) continue;
+            if (!o->adj.ndof[i] || B->node_block[i] != SIZE_MAX) continue;
             if (nodes.n == first) HOC_TRY_GOTO(hoc_grow_push(&start, nodes.n), done);
             B->node_block[i] = start.n - 1;
             HOC_TRY_GOTO(hoc_grow_push(&nodes, i), done);
@@ -66,7 +66,7 @@ hoc_status hoc_opt_build_blocks(hoc_opt *o, int family) {
         size_t first = nodes.n;
         for (size_t k = 3 * (size_t)p; k < np; ++k) {
           size_t i = cn[k];
-          if (!o->ndof[i] || B->node_block[i] != SIZE_MAX) continue;
+          if (!o->adj.ndof[i] || B->node_block[i] != SIZE_MAX) continue;
           if (nodes.n == first) HOC_TRY_GOTO(hoc_grow_push(&start, nodes.n), done);
           B->node_block[i] = start.n - 1;
           HOC_TRY_GOTO(hoc_grow_push(&nodes, i), done);
@@ -89,7 +89,7 @@ hoc_status hoc_opt_build_blocks(hoc_opt *o, int family) {
     int off = 0;
     for (size_t a = B->bn_start[b]; a < B->bn_start[b + 1]; ++a) {
       B->node_off[B->bn_node[a]] = off;
-      off += o->ndof[B->bn_node[a]];
+      off += o->adj.ndof[B->bn_node[a]];
     }
     B->bd_start[b + 1] = B->bd_start[b] + (size_t)off;
     if (off > B->max_nd) B->max_nd = off;
@@ -101,8 +101,8 @@ hoc_status hoc_opt_build_blocks(hoc_opt *o, int family) {
       status = hoc_grow_push(&fs, fe.n);
       for (size_t a = B->bn_start[b]; a < B->bn_start[b + 1] && status == HOC_OK; ++a) {
         size_t i = B->bn_node[a];
-        for (size_t c = o->ne_start[i]; c < o->ne_start[i + 1] && status == HOC_OK; ++c) {
-          size_t e = o->ne_elem[c];
+        for (size_t c = o->adj.ne_start[i]; c < o->adj.ne_start[i + 1] && status == HOC_OK; ++c) {
+          size_t e = o->adj.ne_elem[c];
           int seen = 0;
           for (size_t d = fs.v[b]; d < fe.n && !seen; ++d) seen = fe.v[d] == e;
           if (!seen) status = hoc_grow_push(&fe, e);
@@ -127,15 +127,15 @@ hoc_status hoc_opt_build_blocks(hoc_opt *o, int family) {
       status = hoc_grow_push(&cs, cn.n);
       size_t k = B->bn_node[B->bn_start[b]];
       int vertex = family == 0 && B->bn_start[b + 1] - B->bn_start[b] == 1 && p >= 2 &&
-                   o->ndof[k] == 2;
-      for (size_t a = o->ne_start[k]; a < o->ne_start[k + 1] && vertex; ++a) vertex = o->ne_local[a] < 3;
+                   o->adj.ndof[k] == 2;
+      for (size_t a = o->adj.ne_start[k]; a < o->adj.ne_start[k + 1] && vertex; ++a) vertex = o->adj.ne_local[a] < 3;
       if (!vertex) continue;
-      for (size_t a = o->ne_start[k]; a < o->ne_start[k + 1] && status == HOC_OK; ++a) {
-        size_t e = o->ne_elem[a];
-        int kk = o->ne_local[a];
+      for (size_t a = o->adj.ne_start[k]; a < o->adj.ne_start[k + 1] && status == HOC_OK; ++a) {
+        size_t e = o->adj.ne_elem[a];
+        int kk = o->adj.ne_local[a];
         for (size_t i = 3; i < np && status == HOC_OK; ++i) {
           size_t node = m->conn[e * np + i];
-          if (o->ndof[node] != 2 || m->entity[node] != m->entity[k] || last[node] == b) continue;
+          if (o->adj.ndof[node] != 2 || m->entity[node] != m->entity[k] || last[node] == b) continue;
           double r = o->t->rs[2 * i], s = o->t->rs[2 * i + 1];
           double lam = kk == 0 ? 1 - r - s : kk == 1 ? r : s;
           if (!(lam > HOC_OPT_CARRY_MIN_WEIGHT)) continue;
@@ -236,15 +236,15 @@ double hoc_opt_carry_weight(const hoc_opt *o, size_t b, size_t node) {
 }
 
 void hoc_opt_set_moving(hoc_opt *o, size_t b, unsigned char v) {
-  for (size_t a = o->B->bn_start[b]; a < o->B->bn_start[b + 1]; ++a) o->moving[o->B->bn_node[a]] = v;
-  for (size_t j = o->B->carry_start[b]; j < o->B->carry_start[b + 1]; ++j) o->moving[o->B->carry_node[j]] = v;
+  for (size_t a = o->B->bn_start[b]; a < o->B->bn_start[b + 1]; ++a) o->node.moving[o->B->bn_node[a]] = v;
+  for (size_t j = o->B->carry_start[b]; j < o->B->carry_start[b + 1]; ++j) o->node.moving[o->B->carry_node[j]] = v;
 }
 
 static int block_active(const hoc_opt *o, size_t b) {
-  int act = 0, near = !o->local;
+  int act = 0, near = !o->cfg.local;
   for (size_t a = o->B->bn_start[b]; a < o->B->bn_start[b + 1]; ++a) {
-    act |= o->active[o->B->bn_node[a]];
-    near |= o->near[o->B->bn_node[a]];
+    act |= o->node.active[o->B->bn_node[a]];
+    near |= o->node.near[o->B->bn_node[a]];
   }
   return act && near;
 }
@@ -252,7 +252,7 @@ static int block_active(const hoc_opt *o, size_t b) {
 /* Node k is active again: its blocks of both families go on their colours'
  * queues. */
 void hoc_opt_wake_node(hoc_opt *o, size_t k) {
-  o->active[k] = 1;
+  o->node.active[k] = 1;
   for (int f = 0; f < 2; ++f) {
     hoc_opt_blockset *B = &o->fam[f];
     size_t b = B->node_block[k];
@@ -272,11 +272,11 @@ void hoc_opt_wake_all(hoc_opt *o) {
 
 /* Flags the nodes within HOC_OPT_NEAR_RINGS rings of a tangled element. */
 void hoc_opt_mark_near(hoc_opt *o) {
-  for (size_t e = 0; e < o->m->n_elems; ++e) o->near_e[e] = !o->valid[e];
-  hoc_opt_grow_rings(o->m, o->near_e, o->near, HOC_OPT_NEAR_RINGS);
+  for (size_t e = 0; e < o->m->n_elems; ++e) o->el.near_e[e] = !o->el.valid[e];
+  hoc_opt_grow_rings(o->m, o->el.near_e, o->node.near, HOC_OPT_NEAR_RINGS);
 }
 
-/* The blocks of a colour with an active node into o->list (in an order that
+/* The blocks of a colour with an active node into o->trial.list (in an order that
  * does not matter: blocks of one colour share no element); returns their
  * number. Empties the colour's queue. */
 size_t hoc_opt_select_active(hoc_opt *o, int color) {
@@ -285,13 +285,13 @@ size_t hoc_opt_select_active(hoc_opt *o, int color) {
   for (size_t b = B->queue_head[color], next; b != SIZE_MAX; b = next) {
     next = B->queue_next[b];
     B->queued[b] = 0;
-    if (!B->scan_all[color] && block_active(o, b)) o->list[n++] = b;
+    if (!B->scan_all[color] && block_active(o, b)) o->trial.list[n++] = b;
   }
   B->queue_head[color] = SIZE_MAX;
   if (B->scan_all[color]) {
     B->scan_all[color] = 0;
     for (size_t a = B->color_start[color]; a < B->color_start[color + 1]; ++a)
-      if (block_active(o, B->color_block[a])) o->list[n++] = B->color_block[a];
+      if (block_active(o, B->color_block[a])) o->trial.list[n++] = B->color_block[a];
   }
   return n;
 }

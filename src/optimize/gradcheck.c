@@ -15,10 +15,10 @@
 /* Local objective of block b with unknown `dof` moved by h (the nodes it
  * carries follow), positions and normals evaluated on the CAD. */
 static hoc_status block_f_at(hoc_opt *o, size_t b, int dof, double h, hoc_opt_scratch *s, double *f) {
-  double *st = o->step + o->B->bd_start[b];
+  double *st = o->trial.step + o->B->bd_start[b];
   int nd = (int)(o->B->bd_start[b + 1] - o->B->bd_start[b]);
   for (int c = 0; c < nd; ++c) st[c] = c == dof ? h : 0;
-  o->alpha[b] = 1;
+  o->trial.alpha[b] = 1;
   hoc_opt_set_trial_params(o, b);
   size_t n = 0;
   size_t nlist = o->B->bn_start[b + 1] - o->B->bn_start[b] + o->B->carry_start[b + 1] - o->B->carry_start[b];
@@ -70,10 +70,10 @@ hoc_status hoc_mesh_check_gradient(hoc_mesh *mesh, hoc_measure measure, int fix_
       for (size_t c = ctx.B->bn_start[b]; c < ctx.B->bn_start[b + 1]; ++c)
         if (ctx.B->node_off[ctx.B->bn_node[c]] <= d) k = ctx.B->bn_node[c];
       int dd = d - ctx.B->node_off[k];
-      const double *dz = ctx.dz + 6 * k + 3 * dd;
+      const double *dz = ctx.node.dz + 6 * k + 3 * dd;
       double speed = sqrt(dz[0] * dz[0] + dz[1] * dz[1] + dz[2] * dz[2]);
       if (!(speed > 0)) continue;
-      double h = HOC_OPT_FD_STEP * ctx.hsize[k] / speed, gd = scr->g[d];
+      double h = HOC_OPT_FD_STEP * ctx.adj.hsize[k] / speed, gd = scr->g[d];
       /* fourth-order central difference */
       double fp, fm, fp2, fm2;
       HOC_TRY_GOTO(block_f_at(&ctx, b, d, h, scr, &fp), done);

@@ -20,9 +20,9 @@ void hoc_opt_gather(const hoc_opt *o, size_t e, double *x, double *n) {
   size_t np = (size_t)o->np;
   const size_t *cn = m->conn + e * np, *sl = m->elem_slot + e * np;
   for (size_t i = 0; i < np; ++i) {
-    int mv = o->moving[cn[i]];
-    memcpy(x + 3 * i, (mv ? o->txyz : m->xyz) + 3 * cn[i], 3 * sizeof *x);
-    memcpy(n + 3 * i, (mv ? o->tnormal : o->normal) + 3 * sl[i], 3 * sizeof *n);
+    int mv = o->node.moving[cn[i]];
+    memcpy(x + 3 * i, (mv ? o->trial.txyz : m->xyz) + 3 * cn[i], 3 * sizeof *x);
+    memcpy(n + 3 * i, (mv ? o->trial.tnormal : o->node.normal) + 3 * sl[i], 3 * sizeof *n);
   }
 }
 
@@ -34,7 +34,7 @@ int hoc_opt_param_valid(const hoc_opt *o, size_t e, double *uv) {
   const size_t *cn = m->conn + e * (size_t)np;
   memcpy(uv, m->elem_uv + 2 * e * (size_t)np, 2 * (size_t)np * sizeof *uv);
   for (int i = 0; i < np; ++i)
-    if (o->moving[cn[i]]) hoc_opt_trial_elem_uv(o, cn[i], e, i, uv + 2 * i);
+    if (o->node.moving[cn[i]]) hoc_opt_trial_elem_uv(o, cn[i], e, i, uv + 2 * i);
   double sign = m->face_orient[m->elem_face[e]] < 0 ? -1.0 : 1.0;
   for (int j = 0; j < np; ++j) {
     const double *g = o->t->Gn + 2 * (size_t)j * np;
@@ -91,16 +91,16 @@ static void sigma_stats(const hoc_opt *o, const double *x, const double *n, doub
 int hoc_opt_elem_residuals(const hoc_opt *o, size_t e, const double *x, const double *n,
                           const unsigned char *need, double *r, double *J, double *smin) {
   int nq = o->nq, np = o->np;
-  double s = hoc_element_residuals(o->t, o->measure, x, n, o->delta[e], need, r, J);
+  double s = hoc_element_residuals(o->t, o->measure, x, n, o->el.delta[e], need, r, J);
   if (smin) *smin = s;
-  if (!o->region[e]) return nq;
-  hoc_element_node_residuals(o->t, o->measure, x, n, o->delta[e], o->exact, need, r + nq,
+  if (!o->el.region[e]) return nq;
+  hoc_element_node_residuals(o->t, o->measure, x, n, o->el.delta[e], o->cfg.exact, need, r + nq,
                              J ? J + 3 * (size_t)nq * (size_t)np : NULL);
-  int count = nq + hoc_element_node_points(o->t, o->exact);
-  if (!o->has_fold[e]) return count;
+  int count = nq + hoc_element_node_points(o->t, o->cfg.exact);
+  if (!o->el.has_fold[e]) return count;
   /* weighted as one of the node residuals */
-  hoc_element_point_residual(o->t, o->measure, x, n, o->delta[e], o->fold_rs + 2 * e,
-                             1.0 / hoc_element_node_points(o->t, o->exact), need, r + count,
+  hoc_element_point_residual(o->t, o->measure, x, n, o->el.delta[e], o->el.fold_rs + 2 * e,
+                             1.0 / hoc_element_node_points(o->t, o->cfg.exact), need, r + count,
                              J ? J + 3 * (size_t)count * (size_t)np : NULL);
   return count + 1;
 }
@@ -111,7 +111,7 @@ hoc_status hoc_opt_sweep_start(hoc_opt *o, double *objective, double *min_q, siz
   hoc_mesh *m = o->m;
   size_t ne = m->n_elems;
   int np = o->np, nq = o->nq;
-  double *fe = o->fe, *qe = o->qe;
+  double *fe = o->el.fe, *qe = o->el.qe;
   int failed = 0;
   /* elements whose nodes moved: q, validity, their own regularisation */
 #pragma omp parallel
@@ -124,24 +124,24 @@ hoc_status hoc_opt_sweep_start(hoc_opt *o, double *objective, double *min_q, siz
     double *n = x ? x + 3 * np : NULL, *uv = x ? x + 6 * np + nq : NULL;
 #pragma omp for schedule(static)
     for (size_t e = 0; e < ne; ++e) {
-      if (!x || !o->dirty[e]) continue;
+      if (!x || !o->el.dirty[e]) continue;
       hoc_opt_gather(o, e, x, n);
       double eta;
-      qe[e] = hoc_element_quality_test(o->t, o->measure, x, n, o->exact, &eta, NULL);
-      o->valid[e] = qe[e] > 0;
-      o->xvalid[e] = o->valid[e] && (o->exact || !hoc_opt_guarded(o, e) || !hoc_element_folded(o->t, x, n));
-      o->pvalid[e] = (unsigned char)hoc_opt_param_valid(o, e, uv);
-      o->delta_own[e] = 0;
+      qe[e] = hoc_element_quality_test(o->t, o->measure, x, n, o->cfg.exact, &eta, NULL);
+      o->el.valid[e] = qe[e] > 0;
+      o->el.xvalid[e] = o->el.valid[e] && (o->cfg.exact || !hoc_opt_guarded(o, e) || !hoc_element_folded(o->t, x, n));
+      o->el.pvalid[e] = (unsigned char)hoc_opt_param_valid(o, e, uv);
+      o->el.delta_own[e] = 0;
       /* a fold the samples miss: a residual where the exact tests found it
        * (the samples' residuals cannot see it, and no step would open it) */
-      o->has_fold[e] = o->exact && !o->valid[e] && !hoc_element_tangled(o->t, x, n, 0) &&
-                       hoc_element_fold_point(o->t, x, n, o->fold_rs + 2 * e);
-      if (!o->valid[e]) {
+      o->el.has_fold[e] = o->cfg.exact && !o->el.valid[e] && !hoc_element_tangled(o->t, x, n, 0) &&
+                       hoc_element_fold_point(o->t, x, n, o->el.fold_rs + 2 * e);
+      if (!o->el.valid[e]) {
         double smin, scale;
         sigma_stats(o, x, n, &smin, &scale);
-        double eps = o->eps * scale;
-        o->delta_own[e] = smin < eps ? sqrt(eps * (eps - smin)) : 0;
-        if (!(o->delta_own[e] > 0)) o->delta_own[e] = eps;
+        double eps = o->cfg.eps * scale;
+        o->el.delta_own[e] = smin < eps ? sqrt(eps * (eps - smin)) : 0;
+        if (!(o->el.delta_own[e] > 0)) o->el.delta_own[e] = eps;
       }
     }
     free(x);
@@ -149,17 +149,17 @@ hoc_status hoc_opt_sweep_start(hoc_opt *o, double *objective, double *min_q, siz
   /* the tangled region: tangled elements and those sharing a node with one
    * take the largest regularisation around them (Escobar et al. regularise
    * the whole mesh with one delta; this keeps the rest of it exact) */
-  memcpy(o->was_region, o->region, ne);
-  memset(o->region, 0, ne);
-  for (size_t e = 0; e < ne; ++e) o->delta[e] = o->delta_own[e];
+  memcpy(o->el.was_region, o->el.region, ne);
+  memset(o->el.region, 0, ne);
+  for (size_t e = 0; e < ne; ++e) o->el.delta[e] = o->el.delta_own[e];
   for (size_t e = 0; e < ne && !failed; ++e) {
-    if (o->valid[e]) continue;
+    if (o->el.valid[e]) continue;
     for (int i = 0; i < np; ++i) {
       size_t node = m->conn[e * (size_t)np + (size_t)i];
-      for (size_t a = o->ne_start[node]; a < o->ne_start[node + 1]; ++a) {
-        size_t e2 = o->ne_elem[a];
-        o->region[e2] = 1;
-        if (o->delta[e2] < o->delta_own[e]) o->delta[e2] = o->delta_own[e];
+      for (size_t a = o->adj.ne_start[node]; a < o->adj.ne_start[node + 1]; ++a) {
+        size_t e2 = o->adj.ne_elem[a];
+        o->el.region[e2] = 1;
+        if (o->el.delta[e2] < o->el.delta_own[e]) o->el.delta[e2] = o->el.delta_own[e];
       }
     }
   }
@@ -175,7 +175,7 @@ hoc_status hoc_opt_sweep_start(hoc_opt *o, double *objective, double *min_q, siz
     double *n = x ? x + 3 * np : NULL, *r = x ? x + 6 * np : NULL;
 #pragma omp for schedule(static)
     for (size_t e = 0; e < ne; ++e) {
-      if (!x || !(o->dirty[e] || o->region[e] || o->was_region[e])) continue;
+      if (!x || !(o->el.dirty[e] || o->el.region[e] || o->el.was_region[e])) continue;
       hoc_opt_gather(o, e, x, n);
       double f = 0;
       int nr = hoc_opt_elem_residuals(o, e, x, n, NULL, r, NULL, NULL);
@@ -185,7 +185,7 @@ hoc_status hoc_opt_sweep_start(hoc_opt *o, double *objective, double *min_q, siz
     free(x);
   }
   if (failed) return HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
-  memset(o->dirty, 0, ne);
+  memset(o->el.dirty, 0, ne);
   double f = 0, qmin = INFINITY;
   size_t nt = 0;
   for (size_t e = 0; e < ne; ++e) {
@@ -227,13 +227,13 @@ hoc_status hoc_opt_screen(hoc_opt *o) {
     }
 #pragma omp for schedule(static)
     for (size_t e = 0; e < ne; ++e) {
-      if (!need || (o->touched && !o->touched[e])) continue; /* (no free node reads it) */
+      if (!need || (o->adj.touched && !o->adj.touched[e])) continue; /* (no free node reads it) */
       const size_t *cn = m->conn + e * np;
-      for (size_t i = 0; i < np; ++i) need[i] = o->ndof[cn[i]] > 0;
+      for (size_t i = 0; i < np; ++i) need[i] = o->adj.ndof[cn[i]] > 0;
       hoc_opt_gather(o, e, x, n);
       int nr = hoc_opt_elem_residuals(o, e, x, n, need, r, J, NULL);
       for (size_t i = 0; i < np; ++i) {
-        const double *dz = o->dz + 6 * cn[i];
+        const double *dz = o->node.dz + 6 * cn[i];
         double c[5] = {0, 0, 0, 0, 0};
         for (int q = 0; q < nr && need[i]; ++q) {
           const double *j = J + 3 * ((size_t)q * np + i);
@@ -260,24 +260,24 @@ hoc_status hoc_opt_screen(hoc_opt *o) {
   }
 #pragma omp parallel for schedule(static)
   for (size_t k = 0; k < m->n_nodes; ++k) {
-    if (!o->ndof[k]) continue;
+    if (!o->adj.ndof[k]) continue;
     double c[5] = {0, 0, 0, 0, 0};
     int near = 0;
-    for (size_t a = o->ne_start[k]; a < o->ne_start[k + 1]; ++a) {
-      size_t e = o->ne_elem[a];
-      const double *ce = contrib + 5 * (e * np + (size_t)o->ne_local[a]);
+    for (size_t a = o->adj.ne_start[k]; a < o->adj.ne_start[k + 1]; ++a) {
+      size_t e = o->adj.ne_elem[a];
+      const double *ce = contrib + 5 * (e * np + (size_t)o->adj.ne_local[a]);
       for (int d = 0; d < 5; ++d) c[d] += ce[d];
-      near |= o->region[e] || !o->valid[e];
+      near |= o->el.region[e] || !o->el.valid[e];
     }
     double gain;
-    if (o->ndof[k] == 2) {
+    if (o->adj.ndof[k] == 2) {
       double det = c[2] * c[4] - c[3] * c[3];
       gain = det > 0 ? 0.5 * (c[4] * c[0] * c[0] - 2 * c[3] * c[0] * c[1] + c[2] * c[1] * c[1]) / det
                      : INFINITY;
     } else {
       gain = c[2] > 0 ? 0.5 * c[0] * c[0] / c[2] : INFINITY;
     }
-    o->active[k] = near || !(gain < o->min_gain);
+    o->node.active[k] = near || !(gain < o->cfg.min_gain);
   }
   free(contrib);
   return HOC_OK;

@@ -76,12 +76,8 @@ typedef struct hoc_opt_blockset {
   unsigned char *scan_all; /* [n_colors] every block may be active: look at all */
 } hoc_opt_blockset;
 
-typedef struct hoc_opt {
-  hoc_mesh *m;
-  const hoc_model *model;
-  const hoc_quality_tables *t;
-  hoc_measure measure;
-  int np, nq;
+/* Adjacency and unknowns: fixed once set up. */
+typedef struct hoc_opt_adjacency {
   unsigned char *ndof; /* [n_nodes] unknowns of the node: 0, 1 (t) or 2 (u, v) */
   size_t *ne_start;    /* [n_nodes+1] node -> elements */
   size_t *ne_elem;     /* element */
@@ -90,59 +86,89 @@ typedef struct hoc_opt {
   size_t *ns_slot;
   size_t *nl_start; /* [n_nodes+1] node -> lines */
   size_t *nl_line;
-  hoc_opt_blockset fam[2]; /* 0: vertices (with carried stars), edges, interiors; 1: single nodes */
-  hoc_opt_blockset *B;     /* the family being swept */
-  int max_nd;              /* most unknowns in a block of either family */
-  /* state */
-  double *dz;                 /* [n_nodes][6] dx/dz: (phi_u, phi_v) or (c', 0) */
-  double *normal;             /* [n_slots][3] unit CAD normal at each slot, oriented */
-  double *delta;              /* [n_elems] regularisation of the sweep */
-  unsigned char *valid;       /* [n_elems] not tangled (Definition 2) */
-  unsigned char *pvalid;      /* [n_elems] not folded in the (u,v) plane */
-  unsigned char *xvalid;      /* [n_elems] valid by the exact test too: in a protected run a step
-                                 may not fold it between samples (one folded there already may
-                                 stay so for a while) */
-  int protect;                /* a protected run (see hoc_mesh_optimize) */
-  unsigned char *fragile;     /* [n_elems] guarded as in a protected run (see mark_fragile) */
+  double *hsize;              /* [n_nodes] local length: bound on one step's displacement */
   unsigned char *on_boundary; /* [n_elems] has a node on a CAD curve or vertex: kept unfolded in
-                           (u,v) so no node leaves the trimmed face (inside, 3D validity of
-                           the neighbours is the barrier) */
-  unsigned char *region;      /* [n_elems] tangled or next to a tangled element: regularised, and
-                                 free to pass through sigma = 0 during the sweep */
-  unsigned char *was_region;  /* [n_elems] region of the previous sweep */
-  unsigned char *dirty;       /* [n_elems] a node moved since the last hoc_opt_sweep_start */
-  double *delta_own;          /* [n_elems] regularisation from the element's own tangling */
-  unsigned char *has_fold;    /* [n_elems] tangled by the exact tests alone (the second phase): */
-  double *fold_rs;            /* [n_elems][2] a point where they find sigma < 0, a residual there */
-  double *fe, *qe;        /* [n_elems] objective part and q, as of the last hoc_opt_sweep_start */
-  double *hsize;          /* [n_nodes] local length: bound on one step's displacement */
-  unsigned char *active;  /* [n_nodes] */
-  unsigned char *near;    /* [n_nodes] within NEAR_RINGS elements of a tangled element ... */
-  unsigned char *near_e;  /* [n_elems] (scratch of hoc_opt_mark_near) */
-  int local;              /* ... and only blocks with such a node move (the exact phase while
-                             some element is tangled) */
-  unsigned char *touched; /* [n_elems] has a node that may move (NULL: no node is held by
-                             hoc_optimize_options.free_elements) */
-  double min_gain;        /* per node: a step that lowers f by less puts the block to sleep */
-  double eps;             /* regularisation scale of tangled elements (relative to their size) */
-  int relax_uv;           /* second attempt: relaxed elements may fold in (u, v) too */
-  int exact;              /* the tangle test with the exact fold tests, and dense edge
-                             residuals while untangling (the second phase) */
-  double wake_factor;     /* a move must gain this many times min_gain to wake its neighbours */
-  unsigned char *moving;  /* [n_nodes] use the trial state of this node */
-  /* trial state */
+                                 (u,v) so no node leaves the trimmed face (inside, 3D validity
+                                 of the neighbours is the barrier) */
+  unsigned char *touched;     /* [n_elems] has a node that may move (NULL: no node is held by
+                                 hoc_optimize_options.free_elements) */
+} hoc_opt_adjacency;
+
+/* Per-element state, as of the last hoc_opt_sweep_start unless said
+ * otherwise. */
+typedef struct hoc_opt_elements {
+  double *fe, *qe;           /* [n_elems] objective part and q */
+  unsigned char *valid;      /* [n_elems] not tangled (Definition 2); kept up to date as
+                                blocks move */
+  unsigned char *pvalid;     /* [n_elems] not folded in the (u,v) plane (as valid) */
+  unsigned char *xvalid;     /* [n_elems] valid by the exact test too (as valid): a guarded
+                                element's step may not fold it between samples (one folded
+                                there already may stay so for a while) */
+  unsigned char *fragile;    /* [n_elems] guarded as in a protected run (see mark_fragile) */
+  unsigned char *region;     /* [n_elems] tangled or next to a tangled element: regularised,
+                                and free to pass through sigma = 0 while untangling stalls */
+  unsigned char *was_region; /* [n_elems] region of the previous sweep */
+  unsigned char *dirty;      /* [n_elems] a node moved since the last hoc_opt_sweep_start */
+  double *delta;             /* [n_elems] regularisation of the sweep */
+  double *delta_own;         /* [n_elems] regularisation from the element's own tangling */
+  unsigned char *has_fold;   /* [n_elems] tangled by the exact tests alone (exact phase): */
+  double *fold_rs;           /* [n_elems][2] a point where they find sigma < 0, a residual there */
+  unsigned char *near_e;     /* [n_elems] (scratch of hoc_opt_mark_near) */
+} hoc_opt_elements;
+
+/* Per-node (and per-slot) state. */
+typedef struct hoc_opt_nodes {
+  double *dz;            /* [n_nodes][6] dx/dz: (phi_u, phi_v) or (c', 0) */
+  double *normal;        /* [n_slots][3] unit CAD normal at each slot, oriented */
+  unsigned char *active; /* [n_nodes] awake: its blocks take steps */
+  unsigned char *near;   /* [n_nodes] within HOC_OPT_NEAR_RINGS elements of a tangled one */
+  unsigned char *moving; /* [n_nodes] use the trial state of this node */
+} hoc_opt_nodes;
+
+/* Settings of the run and its current phase. */
+typedef struct hoc_opt_settings {
+  int protect;        /* a protected run (see hoc_mesh_optimize): every element guarded */
+  int exact;          /* the tangle test with the exact fold tests, and dense edge
+                         residuals while untangling (the exact phase) */
+  int relax_uv;       /* second attempt: relaxed elements may fold in (u, v) too */
+  int local;          /* only blocks with a node near a tangled element move (the exact
+                         phase while some element is tangled) */
+  double eps;         /* regularisation scale of tangled elements (relative to their size) */
+  double min_gain;    /* per node: a step that lowers f by less puts the block to sleep */
+  double wake_factor; /* a move must gain this many times min_gain to wake its neighbours */
+} hoc_opt_settings;
+
+/* Trial state of the blocks of a colour and of their nodes. */
+typedef struct hoc_opt_trial {
   double *step;         /* [unknowns] Gauss-Newton direction of each block */
   double *alpha;        /* [n_blocks] step length */
   double *f0, *fnew;    /* [n_blocks] local objective before / after */
   double *slope;        /* [n_blocks] g . step (< 0) */
   unsigned char *state; /* [n_blocks] 0 idle, 1 trying, 2 accepted */
-  size_t *list;         /* [n_blocks] hoc_opt_scratch */
+  size_t *list;         /* [n_blocks] scratch */
   size_t *committed;    /* [n_blocks] blocks of the current colour that moved */
   double *tpar;         /* [n_nodes][2] trial parameters */
   double *txyz;         /* [n_nodes][3] */
   double *tdz;          /* [n_nodes][6] */
   double *tslot_uv;     /* [n_slots][2] */
   double *tnormal;      /* [n_slots][3] */
+} hoc_opt_trial;
+
+/* The optimiser's state. */
+typedef struct hoc_opt {
+  hoc_mesh *m;
+  const hoc_model *model;
+  const hoc_quality_tables *t;
+  hoc_measure measure;
+  int np, nq;
+  hoc_opt_adjacency adj;
+  hoc_opt_blockset fam[2]; /* 0: vertices (with carried stars), edges, interiors; 1: single nodes */
+  hoc_opt_blockset *B;     /* the family being swept */
+  int max_nd;              /* most unknowns in a block of either family */
+  hoc_opt_elements el;
+  hoc_opt_nodes node;
+  hoc_opt_settings cfg;
+  hoc_opt_trial trial;
 } hoc_opt;
 
 typedef struct hoc_opt_scratch {
@@ -152,7 +178,7 @@ typedef struct hoc_opt_scratch {
   unsigned char *nd; /* and its unknowns (0: not moved by the block) */
 } hoc_opt_scratch;
 
-/* Append node to block b's list if free and not there yet. */
+/* A growable array of indices. */
 typedef struct hoc_growlist {
   size_t *v;
   size_t n, cap;
@@ -172,7 +198,7 @@ typedef struct hoc_opt_snapshot {
 /* Element e may not fold between the samples (its steps run the exact
  * tests): every element of a protected run, the fragile ones of any run. */
 static inline int hoc_opt_guarded(const hoc_opt *o, size_t e) {
-  return o->protect || o->fragile[e];
+  return o->cfg.protect || o->el.fragile[e];
 }
 
 static inline void hoc_opt_cross(const double *a, const double *b, double *c) {

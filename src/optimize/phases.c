@@ -17,24 +17,24 @@
 /* The part of f the free nodes can change (all of it without
  * free_elements): the stopping rules' measure of progress. */
 static double free_objective(const hoc_opt *o, double f) {
-  if (!o->touched) return f;
+  if (!o->adj.touched) return f;
   double fl = 0;
   for (size_t e = 0; e < o->m->n_elems; ++e)
-    if (o->touched[e]) fl += o->fe[e];
+    if (o->adj.touched[e]) fl += o->el.fe[e];
   return fl;
 }
 
 /* Above HOC_OPT_PROTECT_MAX_ORDER, in a whole-mesh run, the elements that
  * start valid (exact test) with q < HOC_OPT_FRAGILE_Q are fragile: no step
  * may fold them between the samples (hoc_opt_guarded), and they are never
- * relaxed (relaxed). Sets o->fragile from qe; returns how many. */
+ * relaxed (relaxed). Sets o->el.fragile from qe; returns how many. */
 static size_t mark_fragile(hoc_opt *o) {
   const hoc_mesh *m = o->m;
   size_t n = 0;
-  if (m->order <= HOC_OPT_PROTECT_MAX_ORDER || o->touched) return 0;
+  if (m->order <= HOC_OPT_PROTECT_MAX_ORDER || o->adj.touched) return 0;
   for (size_t e = 0; e < m->n_elems; ++e) {
-    o->fragile[e] = o->qe[e] > 0 && o->qe[e] < HOC_OPT_FRAGILE_Q;
-    n += o->fragile[e];
+    o->el.fragile[e] = o->el.qe[e] > 0 && o->el.qe[e] < HOC_OPT_FRAGILE_Q;
+    n += o->el.fragile[e];
   }
   return n;
 }
@@ -103,7 +103,7 @@ static void new_attempt(run *r, int sweeps) {
 
 /* Every element's state again at the next sweep_start. */
 static hoc_status restart_state(run *r) {
-  memset(r->ctx.dirty, 1, r->mesh->n_elems);
+  memset(r->ctx.el.dirty, 1, r->mesh->n_elems);
   return hoc_opt_sweep_start(&r->ctx, &r->f, &r->qmin, &r->tangled);
 }
 
@@ -123,15 +123,15 @@ static hoc_status begin(run *r) {
   hoc_opt *o = &r->ctx;
   r->best.tangled = SIZE_MAX;
   for (size_t i = 0; i < r->mesh->n_nodes; ++i) {
-    o->active[i] = o->ndof[i] > 0;
-    r->res.free_nodes += o->ndof[i] > 0;
+    o->node.active[i] = o->adj.ndof[i] > 0;
+    r->res.free_nodes += o->adj.ndof[i] > 0;
   }
   hoc_opt_wake_all(o);
-  o->exact = 1;
+  o->cfg.exact = 1;
   HOC_TRY(hoc_opt_sweep_start(o, &r->f, &r->qmin, &r->tangled));
   r->res.tangled_initial = r->tangled;
   r->res.fragile = mark_fragile(o);
-  o->exact = o->touched != NULL;
+  o->cfg.exact = o->adj.touched != NULL;
   HOC_TRY(restart_state(r));
   r->res.objective_initial = r->f;
   r->fewest = r->tangled;
@@ -147,7 +147,7 @@ static void wake_element(run *r, size_t e) {
   hoc_opt *o = &r->ctx;
   for (int i = 0; i < o->np; ++i) {
     size_t node = r->mesh->conn[e * (size_t)o->np + (size_t)i];
-    if (o->ndof[node]) hoc_opt_wake_node(o, node);
+    if (o->adj.ndof[node]) hoc_opt_wake_node(o, node);
   }
 }
 
@@ -157,27 +157,27 @@ static hoc_status sweep(run *r, size_t *moved) {
   hoc_opt *o = &r->ctx;
   hoc_mesh *mesh = r->mesh;
   *moved = 0;
-  int local = o->exact && r->tangled;
+  int local = o->cfg.exact && r->tangled;
   if (local) hoc_opt_mark_near(o);
-  else if (o->local) hoc_opt_wake_all(o); /* the nodes left awake elsewhere */
-  o->local = local;
+  else if (o->cfg.local) hoc_opt_wake_all(o); /* the nodes left awake elsewhere */
+  o->cfg.local = local;
   /* nodes near tangled elements and nodes of poor elements (those that set
    * the mesh's worst quality) never sleep */
   double qmean = 0;
-  for (size_t e = 0; e < mesh->n_elems; ++e) qmean += o->qe[e];
+  for (size_t e = 0; e < mesh->n_elems; ++e) qmean += o->el.qe[e];
   qmean /= (double)(mesh->n_elems ? mesh->n_elems : 1);
   for (size_t e = 0; e < mesh->n_elems; ++e)
-    if (o->region[e] || o->qe[e] < HOC_OPT_POOR_Q_SHARE * qmean) wake_element(r, e);
+    if (o->el.region[e] || o->el.qe[e] < HOC_OPT_POOR_Q_SHARE * qmean) wake_element(r, e);
   /* a step worth less than a small share of the average node's part of f
    * puts its block to sleep */
-  o->min_gain = r->opts.tolerance * free_objective(o, r->f) /
+  o->cfg.min_gain = r->opts.tolerance * free_objective(o, r->f) /
                 (double)(r->res.free_nodes ? r->res.free_nodes : 1);
-  o->wake_factor = r->tangled ? HOC_OPT_WAKE_UNTANGLING : HOC_OPT_WAKE_SMOOTHING;
+  o->cfg.wake_factor = r->tangled ? HOC_OPT_WAKE_UNTANGLING : HOC_OPT_WAKE_SMOOTHING;
   if (r->it == r->it0 + 1) {
     HOC_TRY(hoc_opt_screen(o));
     hoc_opt_wake_all(o);
     for (size_t e = 0; e < mesh->n_elems; ++e)
-      if (o->qe[e] < HOC_OPT_POOR_Q_SHARE * qmean) wake_element(r, e);
+      if (o->el.qe[e] < HOC_OPT_POOR_Q_SHARE * qmean) wake_element(r, e);
   }
   /* the natural blocks, then every node on its own */
   for (int fam = 0; fam < 2; ++fam) {
@@ -201,7 +201,7 @@ static hoc_status after_sweep(run *r, size_t tangled_before) {
     r->fewest = r->tangled;
     r->res.best_iteration = r->fell = r->it;
   }
-  int stall = o->exact ? HOC_OPT_EXACT_STALL_SWEEPS : HOC_OPT_STALL_SWEEPS;
+  int stall = o->cfg.exact ? HOC_OPT_EXACT_STALL_SWEEPS : HOC_OPT_STALL_SWEEPS;
   if (r->tangled && r->it - r->fell >= stall && r->it < r->last) {
     r->last = r->it;
     r->cut = 1;
@@ -213,13 +213,13 @@ static hoc_status after_sweep(run *r, size_t tangled_before) {
    * (free_elements): there the relaxed region folds more than it opens,
    * and the count comes back no lower. */
   if (r->tangled && r->tangled >= tangled_before) {
-    if (!o->touched && ++r->stalled >= HOC_OPT_EPS_STALL) {
-      o->eps = o->eps < HOC_OPT_EPS_RAISE_BELOW ? o->eps * HOC_OPT_EPS_RAISE : HOC_OPT_EPS;
+    if (!o->adj.touched && ++r->stalled >= HOC_OPT_EPS_STALL) {
+      o->cfg.eps = o->cfg.eps < HOC_OPT_EPS_RAISE_BELOW ? o->cfg.eps * HOC_OPT_EPS_RAISE : HOC_OPT_EPS;
       r->stalled = 0;
       HOC_TRY(restart_state(r)); /* every delta changes */
     }
-  } else if (r->tangled < tangled_before && o->eps > HOC_OPT_EPS) {
-    o->eps = HOC_OPT_EPS;
+  } else if (r->tangled < tangled_before && o->cfg.eps > HOC_OPT_EPS) {
+    o->cfg.eps = HOC_OPT_EPS;
     r->stalled = 0;
     HOC_TRY(restart_state(r));
   } else {
@@ -261,15 +261,15 @@ static hoc_status run_sweeps(run *r, int *used_up) {
     if (r->opts.progress) {
       hoc_optimize_iteration info = {r->it,  r->f,  r->qmin,
                                      r->tangled, moved, hoc_opt_now() - r->t0,
-                                     1 + o->relax_uv};
+                                     1 + o->cfg.relax_uv};
       if (r->opts.progress(r->opts.progress_user, &info))
         return HOC_ERROR(HOC_ERR_INTERRUPTED, "optimisation interrupted");
     }
     size_t active = 0;
-    for (size_t i = 0; i < r->mesh->n_nodes; ++i) active += o->active[i];
+    for (size_t i = 0; i < r->mesh->n_nodes; ++i) active += o->node.active[i];
     if (!active || !moved) {
       r->res.converged = r->tangled == 0;
-      if (r->tangled && !o->relax_uv && !o->touched) {
+      if (r->tangled && !o->cfg.relax_uv && !o->adj.touched) {
         r->last = r->it; /* used up: the second attempt */
         r->cut = 1;
         continue;
@@ -290,10 +290,10 @@ static hoc_status run_sweeps(run *r, int *used_up) {
  * over the first one's ground again. *started: whether it was. */
 static hoc_status second_attempt(run *r, int *started) {
   hoc_opt *o = &r->ctx;
-  *started = r->tangled && !o->relax_uv && r->best.tangled != SIZE_MAX && !o->touched;
+  *started = r->tangled && !o->cfg.relax_uv && r->best.tangled != SIZE_MAX && !o->adj.touched;
   if (!*started) return HOC_OK;
-  o->relax_uv = 1;
-  o->eps = HOC_OPT_EPS;
+  o->cfg.relax_uv = 1;
+  o->cfg.eps = HOC_OPT_EPS;
   new_attempt(r, HOC_OPT_LATER_SWEEPS(r->opts.max_iterations));
   hoc_opt_wake_all(o);
   HOC_TRY(restore(r, &r->best));
@@ -312,7 +312,7 @@ static hoc_status second_attempt(run *r, int *started) {
  * PHASE_POLISH. */
 static hoc_status exact_phase(run *r, phase *next) {
   hoc_opt *o = &r->ctx;
-  o->exact = 1;
+  o->cfg.exact = 1;
   size_t sampled = r->tangled;
   r->limited = r->res.stopped_at_limit;
   HOC_TRY(restart_state(r));
@@ -322,8 +322,8 @@ static hoc_status exact_phase(run *r, phase *next) {
   HOC_TRY(hoc_opt_snapshot_take(&r->best, r->mesh, r->tangled, r->f));
   r->fewest = r->tangled;
   r->res.converged = 0;
-  o->relax_uv = 0;
-  o->eps = HOC_OPT_EPS;
+  o->cfg.relax_uv = 0;
+  o->cfg.eps = HOC_OPT_EPS;
   new_attempt(r, HOC_OPT_LATER_SWEEPS(r->opts.max_iterations));
   *next = PHASE_EXACT; /* (each sweep wakes the nodes around the folds) */
   return HOC_OK;
@@ -345,7 +345,7 @@ static hoc_status end_sweeps(run *r, int used_up, phase *next) {
   }
   if (r->best.tangled != SIZE_MAX && r->tangled > r->best.tangled)
     HOC_TRY(restore(r, &r->best)); /* more tangled than once: the best state reached */
-  if (!r->ctx.exact) return exact_phase(r, next);
+  if (!r->ctx.cfg.exact) return exact_phase(r, next);
   *next = PHASE_POLISH;
   return HOC_OK;
 }
@@ -357,7 +357,7 @@ static hoc_status end_sweeps(run *r, int used_up, phase *next) {
 static hoc_status polish_phase(run *r, phase *next) {
   hoc_opt *o = &r->ctx;
   *next = PHASE_DONE;
-  if (!(r->tangled && o->exact && !r->res.stopped_at_limit)) return HOC_OK;
+  if (!(r->tangled && o->cfg.exact && !r->res.stopped_at_limit)) return HOC_OK;
   size_t before = r->tangled;
   HOC_TRY(hoc_opt_snapshot_take(&r->pre, r->mesh, r->tangled, r->f));
   HOC_TRY(hoc_opt_polish(o));
@@ -371,7 +371,7 @@ static hoc_status polish_phase(run *r, phase *next) {
    * valid) */
   r->smoothing = 1;
   r->res.converged = 0;
-  o->eps = HOC_OPT_EPS;
+  o->cfg.eps = HOC_OPT_EPS;
   new_attempt(r, HOC_OPT_LATER_SWEEPS(r->opts.max_iterations));
   hoc_opt_wake_all(o);
   *next = PHASE_SMOOTHING;
@@ -410,7 +410,7 @@ hoc_status hoc_opt_run(hoc_mesh *mesh, const hoc_optimize_options *options, int 
   if (status == HOC_OK)
     status = hoc_opt_setup(o, mesh, opts.measure, opts.fix_curves, opts.free_elements,
                            opts.free_rings);
-  o->protect = protect; /* (setup clears the state) */
+  o->cfg.protect = protect; /* (setup clears the state) */
   if (status == HOC_OK) status = hoc_opt_eval_all(o);
   if (status == HOC_OK) status = hoc_opt_scratch_alloc(o, r->nthreads, &r->scr);
   if (status != HOC_OK) {

@@ -60,25 +60,25 @@ static hoc_status polish_patch(hoc_opt *o, size_t e0, unsigned char *mark) {
   /* the patch's nodes, then every element using one of them (in order) */
   for (int c = 0; c < 3 && status == HOC_OK; ++c) {
     size_t corner = m->conn[e0 * (size_t)np + (size_t)c];
-    for (size_t a = o->ne_start[corner]; a < o->ne_start[corner + 1]; ++a) {
-      size_t e = o->ne_elem[a];
+    for (size_t a = o->adj.ne_start[corner]; a < o->adj.ne_start[corner + 1]; ++a) {
+      size_t e = o->adj.ne_elem[a];
       for (int i = 0; i < np && status == HOC_OK; ++i) {
         size_t k = m->conn[e * (size_t)np + (size_t)i];
-        if (!o->ndof[k] || o->moving[k]) continue;
-        o->moving[k] = 1; /* (as a mark while collecting) */
+        if (!o->adj.ndof[k] || o->node.moving[k]) continue;
+        o->node.moving[k] = 1; /* (as a mark while collecting) */
         status = hoc_grow_push(&gn, k);
       }
     }
   }
   for (size_t a = 0; a < gn.n && status == HOC_OK; ++a)
-    for (size_t b = o->ne_start[gn.v[a]]; b < o->ne_start[gn.v[a] + 1] && status == HOC_OK; ++b) {
-      size_t e = o->ne_elem[b];
+    for (size_t b = o->adj.ne_start[gn.v[a]]; b < o->adj.ne_start[gn.v[a] + 1] && status == HOC_OK; ++b) {
+      size_t e = o->adj.ne_elem[b];
       if (mark[e]) continue;
       mark[e] = 1;
       status = hoc_grow_push(&ge, e);
     }
   for (size_t a = 0; a < gn.n; ++a)
-    o->moving[gn.v[a]] = 0;
+    o->node.moving[gn.v[a]] = 0;
   for (size_t a = 0; a < ge.n; ++a)
     mark[ge.v[a]] = 0;
   if (status != HOC_OK || !gn.n) goto done; /* (every node fixed: nothing to move) */
@@ -105,26 +105,26 @@ static hoc_status polish_patch(hoc_opt *o, size_t e0, unsigned char *mark) {
     int improved = 0;
     for (size_t a = 0; a < nn && count && measures < HOC_OPT_POLISH_MAX_MEASURES; ++a) {
       size_t k = nodes[a];
-      int nd = o->ndof[k];
+      int nd = o->adj.ndof[k];
       for (int dir = 0; dir < 2 * nd && count; ++dir) {
         int d = dir / 2;
-        const double *dz = o->dz + 6 * k + 3 * d;
+        const double *dz = o->node.dz + 6 * k + 3 * d;
         double speed = sqrt(dz[0] * dz[0] + dz[1] * dz[1] + dz[2] * dz[2]);
         if (!(speed > 0)) continue;
-        double h = (dir % 2 ? -1 : 1) * share * o->hsize[k] / speed;
-        o->tpar[2 * k] = m->param[2 * k];
-        o->tpar[2 * k + 1] = m->param[2 * k + 1];
-        o->tpar[2 * k + d] += h;
+        double h = (dir % 2 ? -1 : 1) * share * o->adj.hsize[k] / speed;
+        o->trial.tpar[2 * k] = m->param[2 * k];
+        o->trial.tpar[2 * k + 1] = m->param[2 * k + 1];
+        o->trial.tpar[2 * k + d] += h;
         if (m->dim[k] == HOC_ON_CURVE) {
           const hoc_cad_curve *c = &o->model->curves[m->entity[k]];
-          if (!(c->period > 0) && (o->tpar[2 * k] < c->lo || o->tpar[2 * k] > c->hi)) continue;
+          if (!(c->period > 0) && (o->trial.tpar[2 * k] < c->lo || o->trial.tpar[2 * k] > c->hi)) continue;
         }
         status = hoc_opt_eval_trial(o, k);
         if (status != HOC_OK) goto done;
-        o->moving[k] = 1;
+        o->node.moving[k] = 1;
         int ok = 1;
-        for (size_t b = o->nl_start[k]; b < o->nl_start[k + 1] && ok; ++b)
-          ok = hoc_opt_line_monotone(o, o->nl_line[b]);
+        for (size_t b = o->adj.nl_start[k]; b < o->adj.nl_start[k + 1] && ok; ++b)
+          ok = hoc_opt_line_monotone(o, o->adj.nl_line[b]);
         size_t tc = 0;
         double tneg = 0;
         for (size_t b = 0; b < nel && ok; ++b) {
@@ -149,7 +149,7 @@ static hoc_status polish_patch(hoc_opt *o, size_t e0, unsigned char *mark) {
           neg = tneg;
           improved = 1;
         }
-        o->moving[k] = 0;
+        o->node.moving[k] = 0;
       }
     }
     if (!improved) share *= 0.5;
@@ -172,7 +172,7 @@ hoc_status hoc_opt_polish(hoc_opt *o) {
   hoc_mesh *m = o->m;
   size_t tangled = 0;
   for (size_t e = 0; e < m->n_elems; ++e)
-    tangled += o->qe[e] == 0.0;
+    tangled += o->el.qe[e] == 0.0;
   if (!tangled || tangled > HOC_OPT_POLISH_MAX_TANGLED) return HOC_OK;
   double *x = malloc(6 * (size_t)o->np * sizeof *x);
   unsigned char *mark = calloc(m->n_elems, 1);
@@ -183,13 +183,13 @@ hoc_status hoc_opt_polish(hoc_opt *o) {
   }
   hoc_status status = HOC_OK;
   for (size_t e = 0; e < m->n_elems && status == HOC_OK; ++e) {
-    if (o->qe[e] != 0.0 || polish_margin(o, e, x, x + 3 * o->np) > 0) continue;
+    if (o->el.qe[e] != 0.0 || polish_margin(o, e, x, x + 3 * o->np) > 0) continue;
     status = polish_patch(o, e, mark);
   }
   free(x);
   free(mark);
   /* every element again at the next hoc_opt_sweep_start */
-  memset(o->dirty, 1, m->n_elems);
+  memset(o->el.dirty, 1, m->n_elems);
   return status;
 }
 
@@ -202,7 +202,7 @@ hoc_status hoc_mesh_polish(hoc_mesh *mesh, hoc_measure measure, int fix_curves, 
   hoc_status status = hoc_mesh_update_xyz(mesh);
   if (status == HOC_OK) status = hoc_opt_setup(&ctx, mesh, measure, fix_curves, NULL, 0);
   if (status == HOC_OK) status = hoc_opt_eval_all(&ctx);
-  ctx.exact = 1;
+  ctx.cfg.exact = 1;
   if (status == HOC_OK) status = hoc_opt_sweep_start(&ctx, &f, &qmin, &before);
   if (status == HOC_OK) status = hoc_opt_polish(&ctx);
   if (status == HOC_OK) status = hoc_opt_sweep_start(&ctx, &f, &qmin, &after);

@@ -22,14 +22,14 @@ void hoc_opt_free(hoc_opt *o) {
                  b->queued,      b->scan_all};
     for (size_t i = 0; i < sizeof q / sizeof *q; ++i) free(q[i]);
   }
-  void *p[] = {o->ndof,      o->ne_start,    o->ne_elem, o->ne_local,   o->ns_start, o->ns_slot,
-               o->nl_start,  o->nl_line,     o->dz,      o->normal,     o->delta,    o->valid,
-               o->pvalid,    o->on_boundary, o->region,  o->was_region, o->dirty,    o->delta_own,
-               o->fe,        o->qe,          o->hsize,   o->active,     o->moving,   o->step,
-               o->alpha,     o->f0,          o->fnew,    o->slope,      o->state,    o->list,
-               o->committed, o->tpar,        o->txyz,    o->tdz,        o->tslot_uv, o->tnormal,
-               o->xvalid,    o->near,        o->near_e,  o->touched,    o->has_fold, o->fold_rs,
-               o->fragile};
+  void *p[] = {o->adj.ndof,      o->adj.ne_start,    o->adj.ne_elem, o->adj.ne_local,   o->adj.ns_start, o->adj.ns_slot,
+               o->adj.nl_start,  o->adj.nl_line,     o->node.dz,      o->node.normal,     o->el.delta,    o->el.valid,
+               o->el.pvalid,    o->adj.on_boundary, o->el.region,  o->el.was_region, o->el.dirty,    o->el.delta_own,
+               o->el.fe,        o->el.qe,          o->adj.hsize,   o->node.active,     o->node.moving,   o->trial.step,
+               o->trial.alpha,     o->trial.f0,          o->trial.fnew,    o->trial.slope,      o->trial.state,    o->trial.list,
+               o->trial.committed, o->trial.tpar,        o->trial.txyz,    o->trial.tdz,        o->trial.tslot_uv, o->trial.tnormal,
+               o->el.xvalid,    o->node.near,        o->el.near_e,  o->adj.touched,    o->el.has_fold, o->el.fold_rs,
+               o->el.fragile};
   for (size_t i = 0; i < sizeof p / sizeof *p; ++i) free(p[i]);
 }
 
@@ -84,11 +84,11 @@ static hoc_status restrict_free(hoc_opt *o, const unsigned char *flagged, int ri
   memcpy(elem, flagged, ne);
   hoc_opt_grow_rings(m, elem, node, rings);
   for (size_t i = 0; i < nn; ++i)
-    if (!node[i]) o->ndof[i] = 0;
+    if (!node[i]) o->adj.ndof[i] = 0;
   memset(elem, 0, ne);
   for (size_t e = 0; e < ne; ++e)
-    for (size_t k = 0; k < np && !elem[e]; ++k) elem[e] = o->ndof[m->conn[e * np + k]] > 0;
-  o->touched = elem;
+    for (size_t k = 0; k < np && !elem[e]; ++k) elem[e] = o->adj.ndof[m->conn[e * np + k]] > 0;
+  o->adj.touched = elem;
   free(node);
   return HOC_OK;
 }
@@ -99,42 +99,42 @@ hoc_status hoc_opt_setup(hoc_opt *o, hoc_mesh *m, hoc_measure measure, int fix_c
   o->m = m;
   o->model = m->model;
   o->measure = measure;
-  o->eps = HOC_OPT_EPS;
+  o->cfg.eps = HOC_OPT_EPS;
   HOC_TRY(hoc_quality_tables_get(m->order, m->nodeset, &o->t));
   o->np = o->t->np;
   o->nq = o->t->nq;
   size_t nn = m->n_nodes, ne = m->n_elems, np = (size_t)o->np;
-  HOC_ALLOC(o->ndof, nn);
-  HOC_ALLOC(o->ne_local, ne * np + 1);
-  HOC_TRY(hoc_opt_csr_alloc(nn, ne * np, &o->ne_start, &o->ne_elem));
+  HOC_ALLOC(o->adj.ndof, nn);
+  HOC_ALLOC(o->adj.ne_local, ne * np + 1);
+  HOC_TRY(hoc_opt_csr_alloc(nn, ne * np, &o->adj.ne_start, &o->adj.ne_elem));
   for (size_t e = 0; e < ne; ++e)
-    for (size_t k = 0; k < np; ++k) o->ne_start[m->conn[e * np + k] + 1]++;
-  hoc_opt_csr_finish_counts(nn, o->ne_start);
+    for (size_t k = 0; k < np; ++k) o->adj.ne_start[m->conn[e * np + k] + 1]++;
+  hoc_opt_csr_finish_counts(nn, o->adj.ne_start);
   for (size_t e = 0; e < ne; ++e)
     for (size_t k = 0; k < np; ++k) {
-      size_t i = m->conn[e * np + k], pos = o->ne_start[i]++;
-      o->ne_elem[pos] = e;
-      o->ne_local[pos] = (int)k;
+      size_t i = m->conn[e * np + k], pos = o->adj.ne_start[i]++;
+      o->adj.ne_elem[pos] = e;
+      o->adj.ne_local[pos] = (int)k;
     }
-  hoc_opt_csr_restore(nn, o->ne_start);
-  HOC_TRY(hoc_opt_csr_alloc(nn, m->n_slots, &o->ns_start, &o->ns_slot));
-  for (size_t s = 0; s < m->n_slots; ++s) o->ns_start[m->slot_node[s] + 1]++;
-  hoc_opt_csr_finish_counts(nn, o->ns_start);
-  for (size_t s = 0; s < m->n_slots; ++s) o->ns_slot[o->ns_start[m->slot_node[s]]++] = s;
-  hoc_opt_csr_restore(nn, o->ns_start);
+  hoc_opt_csr_restore(nn, o->adj.ne_start);
+  HOC_TRY(hoc_opt_csr_alloc(nn, m->n_slots, &o->adj.ns_start, &o->adj.ns_slot));
+  for (size_t s = 0; s < m->n_slots; ++s) o->adj.ns_start[m->slot_node[s] + 1]++;
+  hoc_opt_csr_finish_counts(nn, o->adj.ns_start);
+  for (size_t s = 0; s < m->n_slots; ++s) o->adj.ns_slot[o->adj.ns_start[m->slot_node[s]]++] = s;
+  hoc_opt_csr_restore(nn, o->adj.ns_start);
   size_t lp = (size_t)m->order + 1;
-  HOC_TRY(hoc_opt_csr_alloc(nn, m->n_lines * lp, &o->nl_start, &o->nl_line));
+  HOC_TRY(hoc_opt_csr_alloc(nn, m->n_lines * lp, &o->adj.nl_start, &o->adj.nl_line));
   for (size_t l = 0; l < m->n_lines; ++l)
-    for (size_t k = 0; k < lp; ++k) o->nl_start[m->line_conn[l * lp + k] + 1]++;
-  hoc_opt_csr_finish_counts(nn, o->nl_start);
+    for (size_t k = 0; k < lp; ++k) o->adj.nl_start[m->line_conn[l * lp + k] + 1]++;
+  hoc_opt_csr_finish_counts(nn, o->adj.nl_start);
   for (size_t l = 0; l < m->n_lines; ++l)
-    for (size_t k = 0; k < lp; ++k) o->nl_line[o->nl_start[m->line_conn[l * lp + k]]++] = l;
-  hoc_opt_csr_restore(nn, o->nl_start);
+    for (size_t k = 0; k < lp; ++k) o->adj.nl_line[o->adj.nl_start[m->line_conn[l * lp + k]]++] = l;
+  hoc_opt_csr_restore(nn, o->adj.nl_start);
   for (size_t i = 0; i < nn; ++i) {
-    if (o->ne_start[i + 1] == o->ne_start[i]) continue; /* used by no element */
-    if (m->dim[i] == HOC_ON_FACE) o->ndof[i] = 2;
+    if (o->adj.ne_start[i + 1] == o->adj.ne_start[i]) continue; /* used by no element */
+    if (m->dim[i] == HOC_ON_FACE) o->adj.ndof[i] = 2;
     else if (m->dim[i] == HOC_ON_CURVE && !fix_curves && !m->model->curves[m->entity[i]].degenerate)
-      o->ndof[i] = 1;
+      o->adj.ndof[i] = 1;
   }
   if (free_elements) HOC_TRY(restrict_free(o, free_elements, free_rings));
   /* the two families at once (each fills only its own blockset) */
@@ -148,50 +148,50 @@ hoc_status hoc_opt_setup(hoc_opt *o, hoc_mesh *m, hoc_measure measure, int fix_c
   size_t nd_total = o->fam[0].bd_start[o->fam[0].n_blocks] > o->fam[1].bd_start[o->fam[1].n_blocks]
                         ? o->fam[0].bd_start[o->fam[0].n_blocks]
                         : o->fam[1].bd_start[o->fam[1].n_blocks];
-  HOC_ALLOC(o->dz, 6 * nn);
-  HOC_ALLOC(o->normal, 3 * m->n_slots + 3);
-  HOC_ALLOC(o->delta, ne);
-  HOC_ALLOC(o->valid, ne);
-  HOC_ALLOC(o->xvalid, ne);
-  HOC_ALLOC(o->fragile, ne);
-  memset(o->fragile, 0, ne);
-  HOC_ALLOC(o->pvalid, ne);
-  HOC_ALLOC(o->on_boundary, ne);
+  HOC_ALLOC(o->node.dz, 6 * nn);
+  HOC_ALLOC(o->node.normal, 3 * m->n_slots + 3);
+  HOC_ALLOC(o->el.delta, ne);
+  HOC_ALLOC(o->el.valid, ne);
+  HOC_ALLOC(o->el.xvalid, ne);
+  HOC_ALLOC(o->el.fragile, ne);
+  memset(o->el.fragile, 0, ne);
+  HOC_ALLOC(o->el.pvalid, ne);
+  HOC_ALLOC(o->adj.on_boundary, ne);
   for (size_t e = 0; e < ne; ++e)
-    for (size_t k = 0; k < np; ++k) o->on_boundary[e] |= m->dim[m->conn[e * np + k]] != HOC_ON_FACE;
-  HOC_ALLOC(o->region, ne);
-  HOC_ALLOC(o->was_region, ne);
-  HOC_ALLOC(o->dirty, ne);
-  HOC_ALLOC(o->delta_own, ne);
-  HOC_ALLOC(o->has_fold, ne);
-  HOC_ALLOC(o->fold_rs, 2 * ne);
-  HOC_ALLOC(o->fe, ne);
-  HOC_ALLOC(o->qe, ne);
-  memset(o->dirty, 1, ne);
-  HOC_ALLOC(o->hsize, nn);
-  HOC_ALLOC(o->active, nn);
-  HOC_ALLOC(o->near, nn);
-  HOC_ALLOC(o->near_e, ne);
-  HOC_ALLOC(o->moving, nn);
-  HOC_ALLOC(o->step, nd_total + 1);
-  HOC_ALLOC(o->alpha, nb + 1);
-  HOC_ALLOC(o->f0, nb + 1);
-  HOC_ALLOC(o->fnew, nb + 1);
-  HOC_ALLOC(o->slope, nb + 1);
-  HOC_ALLOC(o->state, nb + 1);
-  HOC_ALLOC(o->list, nb + 1);
-  HOC_ALLOC(o->committed, nb + 1);
-  HOC_ALLOC(o->tpar, 2 * nn);
-  HOC_ALLOC(o->txyz, 3 * nn);
-  HOC_ALLOC(o->tdz, 6 * nn);
-  HOC_ALLOC(o->tslot_uv, 2 * m->n_slots + 2);
-  HOC_ALLOC(o->tnormal, 3 * m->n_slots + 3);
+    for (size_t k = 0; k < np; ++k) o->adj.on_boundary[e] |= m->dim[m->conn[e * np + k]] != HOC_ON_FACE;
+  HOC_ALLOC(o->el.region, ne);
+  HOC_ALLOC(o->el.was_region, ne);
+  HOC_ALLOC(o->el.dirty, ne);
+  HOC_ALLOC(o->el.delta_own, ne);
+  HOC_ALLOC(o->el.has_fold, ne);
+  HOC_ALLOC(o->el.fold_rs, 2 * ne);
+  HOC_ALLOC(o->el.fe, ne);
+  HOC_ALLOC(o->el.qe, ne);
+  memset(o->el.dirty, 1, ne);
+  HOC_ALLOC(o->adj.hsize, nn);
+  HOC_ALLOC(o->node.active, nn);
+  HOC_ALLOC(o->node.near, nn);
+  HOC_ALLOC(o->el.near_e, ne);
+  HOC_ALLOC(o->node.moving, nn);
+  HOC_ALLOC(o->trial.step, nd_total + 1);
+  HOC_ALLOC(o->trial.alpha, nb + 1);
+  HOC_ALLOC(o->trial.f0, nb + 1);
+  HOC_ALLOC(o->trial.fnew, nb + 1);
+  HOC_ALLOC(o->trial.slope, nb + 1);
+  HOC_ALLOC(o->trial.state, nb + 1);
+  HOC_ALLOC(o->trial.list, nb + 1);
+  HOC_ALLOC(o->trial.committed, nb + 1);
+  HOC_ALLOC(o->trial.tpar, 2 * nn);
+  HOC_ALLOC(o->trial.txyz, 3 * nn);
+  HOC_ALLOC(o->trial.tdz, 6 * nn);
+  HOC_ALLOC(o->trial.tslot_uv, 2 * m->n_slots + 2);
+  HOC_ALLOC(o->trial.tnormal, 3 * m->n_slots + 3);
   /* local length: the longest edge of the linear sub-triangles around */
   for (size_t e = 0; e < ne; ++e) {
     const size_t *cn = m->conn + e * np;
     double h = 0;
     for (int k = 0; k < 3; ++k) h = fmax(h, dist3(m->xyz + 3 * cn[k], m->xyz + 3 * cn[(k + 1) % 3]));
-    for (size_t k = 0; k < np; ++k) o->hsize[cn[k]] = fmax(o->hsize[cn[k]], h);
+    for (size_t k = 0; k < np; ++k) o->adj.hsize[cn[k]] = fmax(o->adj.hsize[cn[k]], h);
   }
   return HOC_OK;
 }
@@ -199,7 +199,7 @@ hoc_status hoc_opt_setup(hoc_opt *o, hoc_mesh *m, hoc_measure measure, int fix_c
 /* Derivatives dx/dz of every free node and the normals of every slot. */
 hoc_status hoc_opt_eval_all(hoc_opt *o) {
   hoc_mesh *m = o->m;
-  HOC_TRY(hoc_mesh_slot_normals(m, o->normal));
+  HOC_TRY(hoc_mesh_slot_normals(m, o->node.normal));
   /* face nodes grouped per face, curve nodes per curve */
   size_t nn = m->n_nodes;
   int nf = o->model->n_faces, nc = o->model->n_curves;
@@ -213,13 +213,13 @@ hoc_status hoc_opt_eval_all(hoc_opt *o) {
     goto done;
   }
   for (size_t i = 0; i < nn; ++i) {
-    if (!o->ndof[i]) continue;
+    if (!o->adj.ndof[i]) continue;
     int g = m->dim[i] == HOC_ON_FACE ? m->entity[i] : nf + m->entity[i];
     start[g + 1]++;
   }
   hoc_opt_csr_finish_counts((size_t)(nf + nc), start);
   for (size_t i = 0; i < nn; ++i) {
-    if (!o->ndof[i]) continue;
+    if (!o->adj.ndof[i]) continue;
     int g = m->dim[i] == HOC_ON_FACE ? m->entity[i] : nf + m->entity[i];
     order[start[g]++] = i;
   }
@@ -247,8 +247,8 @@ hoc_status hoc_opt_eval_all(hoc_opt *o) {
     }
     hoc_par_error_catch(&err, st);
     for (size_t k = 0; k < n && st == HOC_OK; ++k) {
-      memcpy(o->dz + 6 * nodes[k], pa + 3 * k, 3 * sizeof *pa);
-      memcpy(o->dz + 6 * nodes[k] + 3, pb + 3 * k, 3 * sizeof *pb);
+      memcpy(o->node.dz + 6 * nodes[k], pa + 3 * k, 3 * sizeof *pa);
+      memcpy(o->node.dz + 6 * nodes[k] + 3, pb + 3 * k, 3 * sizeof *pb);
     }
   }
   free(piece);

@@ -32,7 +32,7 @@ void hoc_opt_block_model(const hoc_opt *o, size_t b, hoc_opt_scratch *s, double 
       s->w[i] = 1;
       if (o->B->node_block[node] == b) {
         s->off[i] = o->B->node_off[node];
-        s->nd[i] = o->ndof[node];
+        s->nd[i] = o->adj.ndof[node];
       } else if (carries && (s->w[i] = hoc_opt_carry_weight(o, b, node)) > 0) {
         s->off[i] = 0;
         s->nd[i] = 2;
@@ -49,7 +49,7 @@ void hoc_opt_block_model(const hoc_opt *o, size_t b, hoc_opt_scratch *s, double 
       int off = s->off[i], nd_i = s->nd[i];
       double w = s->w[i];
       if (!nd_i) continue;
-      const double *dz = o->dz + 6 * node;
+      const double *dz = o->node.dz + 6 * node;
       for (int q = 0; q < nr; ++q) {
         const double *j = s->J + 3 * ((size_t)q * np + (size_t)i);
         Jz[q * nd + off] += w * (j[0] * dz[0] + j[1] * dz[1] + j[2] * dz[2]);
@@ -119,8 +119,8 @@ static int damped_solve(int nd, const double *H, const double *g, double *L, dou
  * folds may need it (a single fold left on a periodic face at order 10
  * opens only so). */
 static int relaxed(const hoc_opt *o, size_t e) {
-  return o->region[e] && o->eps > HOC_OPT_EPS_RAISED && !o->fragile[e] &&
-         (o->m->order <= HOC_OPT_PROTECT_MAX_ORDER || o->exact);
+  return o->el.region[e] && o->cfg.eps > HOC_OPT_EPS_RAISED && !o->el.fragile[e] &&
+         (o->m->order <= HOC_OPT_PROTECT_MAX_ORDER || o->cfg.exact);
 }
 
 /* In the second attempt (relax_uv), relaxed elements on a face's boundary
@@ -130,7 +130,7 @@ static int relaxed(const hoc_opt *o, size_t e) {
  * surface folding. Only in a second attempt: from the start, on thin parts
  * at high orders, it trades one fold for several. */
 static int relaxed_uv(const hoc_opt *o, size_t e) {
-  if (!o->relax_uv || !relaxed(o, e)) return 0;
+  if (!o->cfg.relax_uv || !relaxed(o, e)) return 0;
   const hoc_cad_face *f = &o->model->faces[o->m->elem_face[e]];
   return !(f->pole[0] || f->pole[1] || f->pole[2] || f->pole[3]);
 }
@@ -143,17 +143,17 @@ static int block_trial_flagged(const hoc_opt *o, size_t b, hoc_opt_scratch *s, d
   for (size_t a = o->B->bn_start[b]; a < o->B->bn_start[b + 1]; ++a) {
     size_t k = o->B->bn_node[a];
     if (m->dim[k] != HOC_ON_CURVE) continue;
-    for (size_t c = o->nl_start[k]; c < o->nl_start[k + 1]; ++c)
-      if (!hoc_opt_line_monotone(o, o->nl_line[c])) return 0;
+    for (size_t c = o->adj.nl_start[k]; c < o->adj.nl_start[k + 1]; ++c)
+      if (!hoc_opt_line_monotone(o, o->adj.nl_line[c])) return 0;
   }
   for (size_t a = o->B->be_start[b]; a < o->B->be_start[b + 1]; ++a) {
     size_t e = o->B->be_elem[a];
     hoc_opt_gather(o, e, s->x, s->n);
-    if (o->pvalid[e] && o->on_boundary[e] && !relaxed_uv(o, e) && !hoc_opt_param_valid(o, e, s->uv))
+    if (o->el.pvalid[e] && o->adj.on_boundary[e] && !relaxed_uv(o, e) && !hoc_opt_param_valid(o, e, s->uv))
       return 0;
     double smin;
     int nr = hoc_opt_elem_residuals(o, e, s->x, s->n, NULL, s->r, NULL, &smin);
-    if (o->valid[e] && !relaxed(o, e) && !(smin > 0)) return 0;
+    if (o->el.valid[e] && !relaxed(o, e) && !(smin > 0)) return 0;
     for (int q = 0; q < nr; ++q) *f += s->r[q] * s->r[q];
   }
   if (!isfinite(*f) || !(*f <= fmax)) return 0;
@@ -161,9 +161,9 @@ static int block_trial_flagged(const hoc_opt *o, size_t b, hoc_opt_scratch *s, d
    * lattice) for the elements that must stay valid */
   for (size_t a = o->B->be_start[b]; a < o->B->be_start[b + 1]; ++a) {
     size_t e = o->B->be_elem[a];
-    if (!o->valid[e] || relaxed(o, e)) continue;
+    if (!o->el.valid[e] || relaxed(o, e)) continue;
     hoc_opt_gather(o, e, s->x, s->n);
-    if (hoc_element_nodes_tangled(o->t, s->x, s->n, o->exact || (hoc_opt_guarded(o, e) && o->xvalid[e])))
+    if (hoc_element_nodes_tangled(o->t, s->x, s->n, o->cfg.exact || (hoc_opt_guarded(o, e) && o->el.xvalid[e])))
       return 0;
   }
   return 1;
@@ -179,7 +179,7 @@ static int block_trial(hoc_opt *o, size_t b, hoc_opt_scratch *s, double fmax, do
 /* Block b touches a tangled element or one next to it. */
 static int near_tangled(const hoc_opt *o, size_t b) {
   for (size_t a = o->B->be_start[b]; a < o->B->be_start[b + 1]; ++a)
-    if (o->region[o->B->be_elem[a]] || !o->valid[o->B->be_elem[a]]) return 1;
+    if (o->el.region[o->B->be_elem[a]] || !o->el.valid[o->B->be_elem[a]]) return 1;
   return 0;
 }
 
@@ -190,18 +190,18 @@ hoc_status hoc_opt_do_color(hoc_opt *o, int color, hoc_opt_scratch *scr, int nth
   size_t n = hoc_opt_select_active(o, color);
   *moved = 0;
   if (!n) return HOC_OK;
-  size_t *list = o->list;
+  size_t *list = o->trial.list;
 #pragma omp parallel for schedule(dynamic, 8) num_threads(nthreads)
   for (size_t a = 0; a < n; ++a) {
     size_t b = list[a];
     hoc_opt_scratch *s = &scr[omp_get_thread_num()];
-    for (size_t c = o->B->bn_start[b]; c < o->B->bn_start[b + 1]; ++c) o->active[o->B->bn_node[c]] = 0;
+    for (size_t c = o->B->bn_start[b]; c < o->B->bn_start[b + 1]; ++c) o->node.active[o->B->bn_node[c]] = 0;
     int nd = (int)(o->B->bd_start[b + 1] - o->B->bd_start[b]);
     double f;
     hoc_opt_block_model(o, b, s, &f, s->g, s->H);
-    o->f0[b] = f;
-    o->state[b] = 0;
-    double *st = o->step + o->B->bd_start[b];
+    o->trial.f0[b] = f;
+    o->trial.state[b] = 0;
+    double *st = o->trial.step + o->B->bd_start[b];
     if (!damped_solve(nd, s->H, s->g, s->L, st)) continue;
     double slope = 0;
     for (int c = 0; c < nd; ++c) slope += s->g[c] * st[c];
@@ -209,21 +209,21 @@ hoc_status hoc_opt_do_color(hoc_opt *o, int color, hoc_opt_scratch *scr, int nth
     double alpha = 1, len_max = 0;
     for (size_t c = o->B->bn_start[b]; c < o->B->bn_start[b + 1]; ++c) {
       size_t k = o->B->bn_node[c];
-      const double *dz = o->dz + 6 * k, *sk = st + o->B->node_off[k];
+      const double *dz = o->node.dz + 6 * k, *sk = st + o->B->node_off[k];
       double dx[3];
-      for (int d = 0; d < 3; ++d) dx[d] = dz[d] * sk[0] + (o->ndof[k] == 2 ? dz[3 + d] * sk[1] : 0);
+      for (int d = 0; d < 3; ++d) dx[d] = dz[d] * sk[0] + (o->adj.ndof[k] == 2 ? dz[3 + d] * sk[1] : 0);
       double len = sqrt(dx[0] * dx[0] + dx[1] * dx[1] + dx[2] * dx[2]);
-      len_max = fmax(len_max, len / o->hsize[k]);
+      len_max = fmax(len_max, len / o->adj.hsize[k]);
     }
     if (len_max > HOC_OPT_STEP_CAP) alpha = HOC_OPT_STEP_CAP / len_max;
     if (!(slope < 0) || !isfinite(slope) || !(len_max * alpha > HOC_OPT_STEP_MIN)) continue;
-    o->slope[b] = slope;
-    o->alpha[b] = alpha;
-    o->state[b] = 1;
+    o->trial.slope[b] = slope;
+    o->trial.alpha[b] = alpha;
+    o->trial.state[b] = 1;
   }
   size_t nt = 0;
   for (size_t a = 0; a < n; ++a)
-    if (o->state[list[a]] == 1) list[nt++] = list[a];
+    if (o->trial.state[list[a]] == 1) list[nt++] = list[a];
   size_t n_eval = 0;
   for (size_t a = 0; a < nt; ++a) {
     size_t b = list[a];
@@ -237,7 +237,7 @@ hoc_status hoc_opt_do_color(hoc_opt *o, int color, hoc_opt_scratch *scr, int nth
     for (size_t a = 0; a < nt; ++a) {
       size_t b = list[a];
       for (int tries = 0; tries < HOC_OPT_RANGE_HALVINGS && !hoc_opt_set_trial_params(o, b); ++tries)
-        o->alpha[b] *= HOC_OPT_BACKTRACK;
+        o->trial.alpha[b] *= HOC_OPT_BACKTRACK;
       for (size_t c = o->B->bn_start[b]; c < o->B->bn_start[b + 1]; ++c) elist[ne_list++] = o->B->bn_node[c];
       for (size_t j = o->B->carry_start[b]; j < o->B->carry_start[b + 1]; ++j) elist[ne_list++] = o->B->carry_node[j];
     }
@@ -247,30 +247,30 @@ hoc_status hoc_opt_do_color(hoc_opt *o, int color, hoc_opt_scratch *scr, int nth
       size_t b = list[a];
       hoc_opt_scratch *s = &scr[omp_get_thread_num()];
       double f;
-      int ok = block_trial(o, b, s, o->f0[b] + HOC_OPT_ARMIJO * o->alpha[b] * o->slope[b], &f);
+      int ok = block_trial(o, b, s, o->trial.f0[b] + HOC_OPT_ARMIJO * o->trial.alpha[b] * o->trial.slope[b], &f);
       if (ok) {
         for (size_t c = o->B->bn_start[b]; c < o->B->bn_start[b + 1]; ++c) hoc_opt_commit(o, o->B->bn_node[c]);
         for (size_t j = o->B->carry_start[b]; j < o->B->carry_start[b + 1]; ++j) hoc_opt_commit(o, o->B->carry_node[j]);
-        o->fnew[b] = f;
-        o->state[b] = 2;
+        o->trial.fnew[b] = f;
+        o->trial.state[b] = 2;
       } else {
-        o->alpha[b] *= HOC_OPT_BACKTRACK;
+        o->trial.alpha[b] *= HOC_OPT_BACKTRACK;
       }
     }
     size_t keep = 0;
     for (size_t a = 0; a < nt; ++a) {
       size_t b = list[a];
-      if (o->state[b] != 2) {
+      if (o->trial.state[b] != 2) {
         list[keep++] = b;
         continue;
       }
-      o->state[b] = 0;
-      o->committed[n_committed++] = b;
+      o->trial.state[b] = 0;
+      o->trial.committed[n_committed++] = b;
       size_t nodes = o->B->bn_start[b + 1] - o->B->bn_start[b];
       *moved += nodes;
       /* only a significant move wakes the neighbourhood (small ones would
        * spread waves of smaller ones through the whole mesh) */
-      if (o->f0[b] - o->fnew[b] < o->wake_factor * o->min_gain * (double)nodes && !near_tangled(o, b))
+      if (o->trial.f0[b] - o->trial.fnew[b] < o->cfg.wake_factor * o->cfg.min_gain * (double)nodes && !near_tangled(o, b))
         continue;
       /* wake every node of the elements it touches (itself included) */
       for (size_t c = o->B->be_start[b]; c < o->B->be_start[b + 1]; ++c) {
@@ -281,21 +281,21 @@ hoc_status hoc_opt_do_color(hoc_opt *o, int color, hoc_opt_scratch *scr, int nth
     }
     nt = keep;
   }
-  for (size_t a = 0; a < nt; ++a) o->state[list[a]] = 0; /* gave up: asleep */
+  for (size_t a = 0; a < nt; ++a) o->trial.state[list[a]] = 0; /* gave up: asleep */
     /* validity may have been gained where blocks moved */
 #pragma omp parallel for schedule(dynamic, 8) num_threads(nthreads)
   for (size_t a = 0; a < n_committed; ++a) {
-    size_t b = o->committed[a];
+    size_t b = o->trial.committed[a];
     hoc_opt_scratch *s = &scr[omp_get_thread_num()];
     for (size_t c = o->B->be_start[b]; c < o->B->be_start[b + 1]; ++c) {
       size_t e = o->B->be_elem[c];
-      if (!o->valid[e] || !o->xvalid[e]) {
+      if (!o->el.valid[e] || !o->el.xvalid[e]) {
         hoc_opt_gather(o, e, s->x, s->n);
-        if (!o->valid[e]) o->valid[e] = (unsigned char)!hoc_element_tangled(o->t, s->x, s->n, o->exact);
-        o->xvalid[e] =
-            o->valid[e] && (o->exact || !hoc_opt_guarded(o, e) || !hoc_element_folded(o->t, s->x, s->n));
+        if (!o->el.valid[e]) o->el.valid[e] = (unsigned char)!hoc_element_tangled(o->t, s->x, s->n, o->cfg.exact);
+        o->el.xvalid[e] =
+            o->el.valid[e] && (o->cfg.exact || !hoc_opt_guarded(o, e) || !hoc_element_folded(o->t, s->x, s->n));
       }
-      if (!o->pvalid[e]) o->pvalid[e] = (unsigned char)hoc_opt_param_valid(o, e, s->uv);
+      if (!o->el.pvalid[e]) o->el.pvalid[e] = (unsigned char)hoc_opt_param_valid(o, e, s->uv);
     }
   }
 done:

@@ -45,13 +45,13 @@ void hoc_opt_trial_elem_uv(const hoc_opt *o, size_t k, size_t e, int kk, double 
   const double *cur = m->elem_uv + 2 * (e * (size_t)o->np + (size_t)kk);
   if (m->dim[k] == HOC_ON_FACE) {
     /* the same displacement as the node's parameters */
-    uv[0] = cur[0] + (o->tpar[2 * k] - m->param[2 * k]);
-    uv[1] = cur[1] + (o->tpar[2 * k + 1] - m->param[2 * k + 1]);
+    uv[0] = cur[0] + (o->trial.tpar[2 * k] - m->param[2 * k]);
+    uv[1] = cur[1] + (o->trial.tpar[2 * k + 1] - m->param[2 * k + 1]);
     return;
   }
   size_t s = m->elem_slot[e * (size_t)o->np + (size_t)kk];
-  uv[0] = o->tslot_uv[2 * s];
-  uv[1] = o->tslot_uv[2 * s + 1];
+  uv[0] = o->trial.tslot_uv[2 * s];
+  uv[1] = o->trial.tslot_uv[2 * s + 1];
   hoc_cad_face_unwrap_near(&o->model->faces[m->elem_face[e]], cur, uv);
 }
 
@@ -68,8 +68,8 @@ static int param_ok(double cur, double v, double lo, double hi) {
  * and the nodes it carries. Returns 0 if one leaves a non-closed range. */
 int hoc_opt_set_trial_params(hoc_opt *o, size_t b) {
   const hoc_mesh *m = o->m;
-  const double *st = o->step + o->B->bd_start[b];
-  double al = o->alpha[b];
+  const double *st = o->trial.step + o->B->bd_start[b];
+  double al = o->trial.alpha[b];
   int inside = 1;
   for (size_t a = o->B->bn_start[b]; a < o->B->bn_start[b + 1]; ++a) {
     size_t k = o->B->bn_node[a];
@@ -78,14 +78,14 @@ int hoc_opt_set_trial_params(hoc_opt *o, size_t b) {
       const hoc_cad_face *f = &o->model->faces[m->entity[k]];
       for (int d = 0; d < 2; ++d) {
         double v = m->param[2 * k + d] + al * st[off + d];
-        o->tpar[2 * k + d] = v;
+        o->trial.tpar[2 * k + d] = v;
         if (!(f->period[d] > 0) && !param_ok(m->param[2 * k + d], v, f->lo[d], f->hi[d])) inside = 0;
       }
     } else {
       const hoc_cad_curve *c = &o->model->curves[m->entity[k]];
       double v = m->param[2 * k] + al * st[off];
-      o->tpar[2 * k] = v;
-      o->tpar[2 * k + 1] = 0;
+      o->trial.tpar[2 * k] = v;
+      o->trial.tpar[2 * k + 1] = 0;
       if (!(c->period > 0) && !param_ok(m->param[2 * k], v, c->lo, c->hi)) inside = 0;
     }
   }
@@ -94,7 +94,7 @@ int hoc_opt_set_trial_params(hoc_opt *o, size_t b) {
     const hoc_cad_face *f = &o->model->faces[m->entity[c]];
     for (int d = 0; d < 2; ++d) {
       double v = m->param[2 * c + d] + al * o->B->carry_w[j] * st[d];
-      o->tpar[2 * c + d] = v;
+      o->trial.tpar[2 * c + d] = v;
       if (!(f->period[d] > 0) && !param_ok(m->param[2 * c + d], v, f->lo[d], f->hi[d])) inside = 0;
     }
   }
@@ -108,31 +108,31 @@ hoc_status hoc_opt_eval_trial(hoc_opt *o, size_t i) {
   const hoc_model *model = o->model;
   int ent = m->entity[i];
   if (m->dim[i] == HOC_ON_FACE) {
-    HOC_TRY(hoc_cad_face_eval(model, ent, 1, o->tpar + 2 * i, o->txyz + 3 * i, o->tdz + 6 * i,
-                              o->tdz + 6 * i + 3));
-    size_t s = o->ns_slot[o->ns_start[i]];
-    o->tslot_uv[2 * s] = o->tpar[2 * i];
-    o->tslot_uv[2 * s + 1] = o->tpar[2 * i + 1];
-    HOC_TRY(face_normal(o, ent, o->tpar + 2 * i, o->tdz + 6 * i, o->tdz + 6 * i + 3,
-                        o->tnormal + 3 * s));
+    HOC_TRY(hoc_cad_face_eval(model, ent, 1, o->trial.tpar + 2 * i, o->trial.txyz + 3 * i, o->trial.tdz + 6 * i,
+                              o->trial.tdz + 6 * i + 3));
+    size_t s = o->adj.ns_slot[o->adj.ns_start[i]];
+    o->trial.tslot_uv[2 * s] = o->trial.tpar[2 * i];
+    o->trial.tslot_uv[2 * s + 1] = o->trial.tpar[2 * i + 1];
+    HOC_TRY(face_normal(o, ent, o->trial.tpar + 2 * i, o->trial.tdz + 6 * i, o->trial.tdz + 6 * i + 3,
+                        o->trial.tnormal + 3 * s));
   } else {
-    HOC_TRY(hoc_cad_curve_eval(model, ent, 1, o->tpar + 2 * i, o->txyz + 3 * i, o->tdz + 6 * i));
-    o->tdz[6 * i + 3] = o->tdz[6 * i + 4] = o->tdz[6 * i + 5] = 0;
-    for (size_t j = o->ns_start[i]; j < o->ns_start[i + 1]; ++j) {
-      size_t s = o->ns_slot[j];
+    HOC_TRY(hoc_cad_curve_eval(model, ent, 1, o->trial.tpar + 2 * i, o->trial.txyz + 3 * i, o->trial.tdz + 6 * i));
+    o->trial.tdz[6 * i + 3] = o->trial.tdz[6 * i + 4] = o->trial.tdz[6 * i + 5] = 0;
+    for (size_t j = o->adj.ns_start[i]; j < o->adj.ns_start[i + 1]; ++j) {
+      size_t s = o->adj.ns_slot[j];
       int f = m->slot_face[s];
       double uv[2], du[3], dv[3];
-      HOC_TRY(hoc_cad_curve_to_face(model, ent, f, 1, o->tpar + 2 * i, uv));
+      HOC_TRY(hoc_cad_curve_to_face(model, ent, f, 1, o->trial.tpar + 2 * i, uv));
       hoc_cad_face_unwrap_near(&model->faces[f], m->slot_uv + 2 * s, uv);
       HOC_TRY(hoc_cad_face_eval(model, f, 1, uv, NULL, du, dv));
-      o->tslot_uv[2 * s] = uv[0];
-      o->tslot_uv[2 * s + 1] = uv[1];
-      HOC_TRY(face_normal(o, f, uv, du, dv, o->tnormal + 3 * s));
+      o->trial.tslot_uv[2 * s] = uv[0];
+      o->trial.tslot_uv[2 * s + 1] = uv[1];
+      HOC_TRY(face_normal(o, f, uv, du, dv, o->trial.tnormal + 3 * s));
       /* a small move cannot turn the surface over: where the CAD normal
        * flips (a folded parametrisation at the boundary, see
        * hoc_mesh_slot_normals) the slot keeps its orientation */
-      const double *old = o->normal + 3 * s;
-      double *nw = o->tnormal + 3 * s;
+      const double *old = o->node.normal + 3 * s;
+      double *nw = o->trial.tnormal + 3 * s;
       if (nw[0] * old[0] + nw[1] * old[1] + nw[2] * old[2] < 0)
         for (int d = 0; d < 3; ++d)
           nw[d] = -nw[d];
@@ -168,7 +168,7 @@ int hoc_opt_line_monotone(const hoc_opt *o, size_t l) {
     if (m->dim[i] != HOC_ON_CURVE) {
       t = j == 0 ? ta : tb; /* a vertex end: the line's own parameter */
     } else {
-      t = o->moving[i] ? o->tpar[2 * i] : m->param[2 * i];
+      t = o->node.moving[i] ? o->trial.tpar[2 * i] : m->param[2 * i];
       if (c->period > 0) {
         double guess = ta + (tb - ta) * j / p;
         t -= c->period * floor((t - guess) / c->period + 0.5);
@@ -184,37 +184,37 @@ int hoc_opt_line_monotone(const hoc_opt *o, size_t l) {
 void hoc_opt_commit(hoc_opt *o, size_t k) {
   hoc_mesh *m = o->m;
   int np = o->np;
-  for (size_t a = o->ne_start[k]; a < o->ne_start[k + 1]; ++a) o->dirty[o->ne_elem[a]] = 1;
-  for (size_t a = o->ne_start[k]; a < o->ne_start[k + 1]; ++a) {
-    size_t e = o->ne_elem[a];
-    int kk = o->ne_local[a];
+  for (size_t a = o->adj.ne_start[k]; a < o->adj.ne_start[k + 1]; ++a) o->el.dirty[o->adj.ne_elem[a]] = 1;
+  for (size_t a = o->adj.ne_start[k]; a < o->adj.ne_start[k + 1]; ++a) {
+    size_t e = o->adj.ne_elem[a];
+    int kk = o->adj.ne_local[a];
     double uv[2];
     hoc_opt_trial_elem_uv(o, k, e, kk, uv);
     memcpy(m->elem_uv + 2 * (e * (size_t)np + (size_t)kk), uv, sizeof uv);
   }
   if (m->dim[k] == HOC_ON_CURVE) {
     const hoc_cad_curve *c = &o->model->curves[m->entity[k]];
-    for (size_t a = o->nl_start[k]; a < o->nl_start[k + 1]; ++a) {
-      size_t l = o->nl_line[a];
+    for (size_t a = o->adj.nl_start[k]; a < o->adj.nl_start[k + 1]; ++a) {
+      size_t l = o->adj.nl_line[a];
       const size_t *ln = m->line_conn + l * (size_t)(m->order + 1);
       for (int end = 0; end < 2; ++end) {
         if (ln[end] != k) continue;
-        double t = o->tpar[2 * k], old = m->line_t[2 * l + end];
+        double t = o->trial.tpar[2 * k], old = m->line_t[2 * l + end];
         if (c->period > 0) t -= c->period * floor((t - old) / c->period + 0.5);
         m->line_t[2 * l + end] = t;
       }
     }
   }
-  for (size_t j = o->ns_start[k]; j < o->ns_start[k + 1]; ++j) {
-    size_t s = o->ns_slot[j];
-    memcpy(m->slot_uv + 2 * s, o->tslot_uv + 2 * s, 2 * sizeof(double));
-    memcpy(o->normal + 3 * s, o->tnormal + 3 * s, 3 * sizeof(double));
+  for (size_t j = o->adj.ns_start[k]; j < o->adj.ns_start[k + 1]; ++j) {
+    size_t s = o->adj.ns_slot[j];
+    memcpy(m->slot_uv + 2 * s, o->trial.tslot_uv + 2 * s, 2 * sizeof(double));
+    memcpy(o->node.normal + 3 * s, o->trial.tnormal + 3 * s, 3 * sizeof(double));
   }
-  double p[2] = {o->tpar[2 * k], o->tpar[2 * k + 1]};
+  double p[2] = {o->trial.tpar[2 * k], o->trial.tpar[2 * k + 1]};
   if (m->dim[k] == HOC_ON_FACE) {
     hoc_cad_face_wrap(&o->model->faces[m->entity[k]], p);
     /* the slot keeps the wrapped value too (elements hold unwrapped copies) */
-    size_t s = o->ns_slot[o->ns_start[k]];
+    size_t s = o->adj.ns_slot[o->adj.ns_start[k]];
     memcpy(m->slot_uv + 2 * s, p, sizeof p);
   } else {
     const hoc_cad_curve *c = &o->model->curves[m->entity[k]];
@@ -222,6 +222,6 @@ void hoc_opt_commit(hoc_opt *o, size_t k) {
   }
   m->param[2 * k] = p[0];
   m->param[2 * k + 1] = p[1];
-  memcpy(m->xyz + 3 * k, o->txyz + 3 * k, 3 * sizeof(double));
-  memcpy(o->dz + 6 * k, o->tdz + 6 * k, 6 * sizeof(double));
+  memcpy(m->xyz + 3 * k, o->trial.txyz + 3 * k, 3 * sizeof(double));
+  memcpy(o->node.dz + 6 * k, o->trial.tdz + 6 * k, 6 * sizeof(double));
 }
