@@ -128,14 +128,16 @@ hoc_status hoc_opt_build_blocks(hoc_opt *o, int family) {
       size_t k = B->bn_node[B->bn_start[b]];
       int vertex = family == 0 && B->bn_start[b + 1] - B->bn_start[b] == 1 && p >= 2 &&
                    o->adj.ndof[k] == 2;
-      for (size_t a = o->adj.ne_start[k]; a < o->adj.ne_start[k + 1] && vertex; ++a) vertex = o->adj.ne_local[a] < 3;
+      for (size_t a = o->adj.ne_start[k]; a < o->adj.ne_start[k + 1] && vertex; ++a)
+        vertex = o->adj.ne_local[a] < 3;
       if (!vertex) continue;
       for (size_t a = o->adj.ne_start[k]; a < o->adj.ne_start[k + 1] && status == HOC_OK; ++a) {
         size_t e = o->adj.ne_elem[a];
         int kk = o->adj.ne_local[a];
         for (size_t i = 3; i < np && status == HOC_OK; ++i) {
           size_t node = m->conn[e * np + i];
-          if (o->adj.ndof[node] != 2 || m->entity[node] != m->entity[k] || last[node] == b) continue;
+          if (o->adj.ndof[node] != 2 || m->entity[node] != m->entity[k] || last[node] == b)
+            continue;
           double r = o->t->rs[2 * i], s = o->t->rs[2 * i + 1];
           double lam = kk == 0 ? 1 - r - s : kk == 1 ? r : s;
           if (!(lam > HOC_OPT_CARRY_MIN_WEIGHT)) continue;
@@ -199,7 +201,8 @@ hoc_status hoc_opt_build_blocks(hoc_opt *o, int family) {
       if (c + 1 > max_colors) max_colors = c + 1;
     }
     B->n_colors = max_colors;
-    if (status == HOC_OK) status = hoc_opt_csr_alloc((size_t)max_colors, nb, &B->color_start, &B->color_block);
+    if (status == HOC_OK)
+      status = hoc_opt_csr_alloc((size_t)max_colors, nb, &B->color_start, &B->color_block);
     if (status == HOC_OK) {
       for (size_t b = 0; b < nb; ++b) B->color_start[color[b] + 1]++;
       hoc_opt_csr_finish_counts((size_t)max_colors, B->color_start);
@@ -236,8 +239,10 @@ double hoc_opt_carry_weight(const hoc_opt *o, size_t b, size_t node) {
 }
 
 void hoc_opt_set_moving(hoc_opt *o, size_t b, unsigned char v) {
-  for (size_t a = o->B->bn_start[b]; a < o->B->bn_start[b + 1]; ++a) o->node.moving[o->B->bn_node[a]] = v;
-  for (size_t j = o->B->carry_start[b]; j < o->B->carry_start[b + 1]; ++j) o->node.moving[o->B->carry_node[j]] = v;
+  for (size_t a = o->B->bn_start[b]; a < o->B->bn_start[b + 1]; ++a)
+    o->node.moving[o->B->bn_node[a]] = v;
+  for (size_t j = o->B->carry_start[b]; j < o->B->carry_start[b + 1]; ++j)
+    o->node.moving[o->B->carry_node[j]] = v;
 }
 
 static int block_active(const hoc_opt *o, size_t b) {

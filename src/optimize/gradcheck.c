@@ -14,18 +14,21 @@
 
 /* Local objective of block b with unknown `dof` moved by h (the nodes it
  * carries follow), positions and normals evaluated on the CAD. */
-static hoc_status block_f_at(hoc_opt *o, size_t b, int dof, double h, hoc_opt_scratch *s, double *f) {
+static hoc_status block_f_at(hoc_opt *o, size_t b, int dof, double h, hoc_opt_scratch *s,
+                             double *f) {
   double *st = o->trial.step + o->B->bd_start[b];
   int nd = (int)(o->B->bd_start[b + 1] - o->B->bd_start[b]);
   for (int c = 0; c < nd; ++c) st[c] = c == dof ? h : 0;
   o->trial.alpha[b] = 1;
   hoc_opt_set_trial_params(o, b);
   size_t n = 0;
-  size_t nlist = o->B->bn_start[b + 1] - o->B->bn_start[b] + o->B->carry_start[b + 1] - o->B->carry_start[b];
+  size_t nlist =
+      o->B->bn_start[b + 1] - o->B->bn_start[b] + o->B->carry_start[b + 1] - o->B->carry_start[b];
   size_t *list = hoc_calloc(nlist + 1, sizeof *list);
   HOC_CHECK(list, HOC_ERR_MEMORY, "out of memory");
   for (size_t c = o->B->bn_start[b]; c < o->B->bn_start[b + 1]; ++c) list[n++] = o->B->bn_node[c];
-  for (size_t j = o->B->carry_start[b]; j < o->B->carry_start[b + 1]; ++j) list[n++] = o->B->carry_node[j];
+  for (size_t j = o->B->carry_start[b]; j < o->B->carry_start[b + 1]; ++j)
+    list[n++] = o->B->carry_node[j];
   hoc_status st2 = hoc_opt_eval_trials(o, list, n, 1);
   free(list);
   HOC_TRY(st2);

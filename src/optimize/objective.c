@@ -129,7 +129,8 @@ hoc_status hoc_opt_sweep_start(hoc_opt *o, double *objective, double *min_q, siz
       double eta;
       qe[e] = hoc_element_quality_test(o->t, o->measure, x, n, o->cfg.exact, &eta, NULL);
       o->el.valid[e] = qe[e] > 0;
-      o->el.xvalid[e] = o->el.valid[e] && (o->cfg.exact || !hoc_opt_guarded(o, e) || !hoc_element_folded(o->t, x, n));
+      o->el.xvalid[e] = o->el.valid[e] &&
+                        (o->cfg.exact || !hoc_opt_guarded(o, e) || !hoc_element_folded(o->t, x, n));
       o->el.pvalid[e] = (unsigned char)hoc_opt_param_valid(o, e, uv);
       o->el.delta_own[e] = 0;
       /* a fold the samples miss: a residual where the exact tests found it
@@ -272,8 +273,9 @@ hoc_status hoc_opt_screen(hoc_opt *o) {
     double gain;
     if (o->adj.ndof[k] == 2) {
       double det = c[2] * c[4] - c[3] * c[3];
-      gain = det > 0 ? 0.5 * (c[4] * c[0] * c[0] - 2 * c[3] * c[0] * c[1] + c[2] * c[1] * c[1]) / det
-                     : INFINITY;
+      gain = det > 0
+                 ? 0.5 * (c[4] * c[0] * c[0] - 2 * c[3] * c[0] * c[1] + c[2] * c[1] * c[1]) / det
+                 : INFINITY;
     } else {
       gain = c[2] > 0 ? 0.5 * c[0] * c[0] / c[2] : INFINITY;
     }

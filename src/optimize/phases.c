@@ -171,7 +171,7 @@ static hoc_status sweep(run *r, size_t *moved) {
   /* a step worth less than a small share of the average node's part of f
    * puts its block to sleep */
   o->cfg.min_gain = r->opts.tolerance * free_objective(o, r->f) /
-                (double)(r->res.free_nodes ? r->res.free_nodes : 1);
+                    (double)(r->res.free_nodes ? r->res.free_nodes : 1);
   o->cfg.wake_factor = r->tangled ? HOC_OPT_WAKE_UNTANGLING : HOC_OPT_WAKE_SMOOTHING;
   if (r->it == r->it0 + 1) {
     HOC_TRY(hoc_opt_screen(o));
@@ -214,7 +214,8 @@ static hoc_status after_sweep(run *r, size_t tangled_before) {
    * and the count comes back no lower. */
   if (r->tangled && r->tangled >= tangled_before) {
     if (!o->adj.touched && ++r->stalled >= HOC_OPT_EPS_STALL) {
-      o->cfg.eps = o->cfg.eps < HOC_OPT_EPS_RAISE_BELOW ? o->cfg.eps * HOC_OPT_EPS_RAISE : HOC_OPT_EPS;
+      o->cfg.eps =
+          o->cfg.eps < HOC_OPT_EPS_RAISE_BELOW ? o->cfg.eps * HOC_OPT_EPS_RAISE : HOC_OPT_EPS;
       r->stalled = 0;
       HOC_TRY(restart_state(r)); /* every delta changes */
     }

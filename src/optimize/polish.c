@@ -71,7 +71,8 @@ static hoc_status polish_patch(hoc_opt *o, size_t e0, unsigned char *mark) {
     }
   }
   for (size_t a = 0; a < gn.n && status == HOC_OK; ++a)
-    for (size_t b = o->adj.ne_start[gn.v[a]]; b < o->adj.ne_start[gn.v[a] + 1] && status == HOC_OK; ++b) {
+    for (size_t b = o->adj.ne_start[gn.v[a]]; b < o->adj.ne_start[gn.v[a] + 1] && status == HOC_OK;
+         ++b) {
       size_t e = o->adj.ne_elem[b];
       if (mark[e]) continue;
       mark[e] = 1;
@@ -117,7 +118,8 @@ static hoc_status polish_patch(hoc_opt *o, size_t e0, unsigned char *mark) {
         o->trial.tpar[2 * k + d] += h;
         if (m->dim[k] == HOC_ON_CURVE) {
           const hoc_cad_curve *c = &o->model->curves[m->entity[k]];
-          if (!(c->period > 0) && (o->trial.tpar[2 * k] < c->lo || o->trial.tpar[2 * k] > c->hi)) continue;
+          if (!(c->period > 0) && (o->trial.tpar[2 * k] < c->lo || o->trial.tpar[2 * k] > c->hi))
+            continue;
         }
         status = hoc_opt_eval_trial(o, k);
         if (status != HOC_OK) goto done;

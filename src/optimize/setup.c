@@ -22,14 +22,16 @@ void hoc_opt_free(hoc_opt *o) {
                  b->queued,      b->scan_all};
     for (size_t i = 0; i < sizeof q / sizeof *q; ++i) free(q[i]);
   }
-  void *p[] = {o->adj.ndof,      o->adj.ne_start,    o->adj.ne_elem, o->adj.ne_local,   o->adj.ns_start, o->adj.ns_slot,
-               o->adj.nl_start,  o->adj.nl_line,     o->node.dz,      o->node.normal,     o->el.delta,    o->el.valid,
-               o->el.pvalid,    o->adj.on_boundary, o->el.region,  o->el.was_region, o->el.dirty,    o->el.delta_own,
-               o->el.fe,        o->el.qe,          o->adj.hsize,   o->node.active,     o->node.moving,   o->trial.step,
-               o->trial.alpha,     o->trial.f0,          o->trial.fnew,    o->trial.slope,      o->trial.state,    o->trial.list,
-               o->trial.committed, o->trial.tpar,        o->trial.txyz,    o->trial.tdz,        o->trial.tslot_uv, o->trial.tnormal,
-               o->el.xvalid,    o->node.near,        o->el.near_e,  o->adj.touched,    o->el.has_fold, o->el.fold_rs,
-               o->el.fragile};
+  void *p[] = {
+      o->adj.ndof,        o->adj.ne_start, o->adj.ne_elem,  o->adj.ne_local,    o->adj.ns_start,
+      o->adj.ns_slot,     o->adj.nl_start, o->adj.nl_line,  o->node.dz,         o->node.normal,
+      o->el.delta,        o->el.valid,     o->el.pvalid,    o->adj.on_boundary, o->el.region,
+      o->el.was_region,   o->el.dirty,     o->el.delta_own, o->el.fe,           o->el.qe,
+      o->adj.hsize,       o->node.active,  o->node.moving,  o->trial.step,      o->trial.alpha,
+      o->trial.f0,        o->trial.fnew,   o->trial.slope,  o->trial.state,     o->trial.list,
+      o->trial.committed, o->trial.tpar,   o->trial.txyz,   o->trial.tdz,       o->trial.tslot_uv,
+      o->trial.tnormal,   o->el.xvalid,    o->node.near,    o->el.near_e,       o->adj.touched,
+      o->el.has_fold,     o->el.fold_rs,   o->el.fragile};
   for (size_t i = 0; i < sizeof p / sizeof *p; ++i) free(p[i]);
 }
 
@@ -140,7 +142,8 @@ hoc_status hoc_opt_setup(hoc_opt *o, hoc_mesh *m, hoc_measure measure, int fix_c
   /* the two families at once (each fills only its own blockset) */
   hoc_par_error err = {0};
 #pragma omp parallel for schedule(static, 1) num_threads(2) if (omp_get_max_threads() > 1)
-  for (int family = 0; family < 2; ++family) hoc_par_error_catch(&err, hoc_opt_build_blocks(o, family));
+  for (int family = 0; family < 2; ++family)
+    hoc_par_error_catch(&err, hoc_opt_build_blocks(o, family));
   HOC_TRY(hoc_par_error_raise(&err));
   o->B = &o->fam[0]; /* family 0 is current by default */
   o->max_nd = o->fam[0].max_nd > o->fam[1].max_nd ? o->fam[0].max_nd : o->fam[1].max_nd;
@@ -158,7 +161,8 @@ hoc_status hoc_opt_setup(hoc_opt *o, hoc_mesh *m, hoc_measure measure, int fix_c
   HOC_ALLOC(o->el.pvalid, ne);
   HOC_ALLOC(o->adj.on_boundary, ne);
   for (size_t e = 0; e < ne; ++e)
-    for (size_t k = 0; k < np; ++k) o->adj.on_boundary[e] |= m->dim[m->conn[e * np + k]] != HOC_ON_FACE;
+    for (size_t k = 0; k < np; ++k)
+      o->adj.on_boundary[e] |= m->dim[m->conn[e * np + k]] != HOC_ON_FACE;
   HOC_ALLOC(o->el.region, ne);
   HOC_ALLOC(o->el.was_region, ne);
   HOC_ALLOC(o->el.dirty, ne);
@@ -190,7 +194,8 @@ hoc_status hoc_opt_setup(hoc_opt *o, hoc_mesh *m, hoc_measure measure, int fix_c
   for (size_t e = 0; e < ne; ++e) {
     const size_t *cn = m->conn + e * np;
     double h = 0;
-    for (int k = 0; k < 3; ++k) h = fmax(h, dist3(m->xyz + 3 * cn[k], m->xyz + 3 * cn[(k + 1) % 3]));
+    for (int k = 0; k < 3; ++k)
+      h = fmax(h, dist3(m->xyz + 3 * cn[k], m->xyz + 3 * cn[(k + 1) % 3]));
     for (size_t k = 0; k < np; ++k) o->adj.hsize[cn[k]] = fmax(o->adj.hsize[cn[k]], h);
   }
   return HOC_OK;

@@ -16,7 +16,8 @@
 
 /* Local objective of block b at the current state: f, gradient g[nd] and
  * Gauss-Newton matrix H[nd][nd] in its unknowns. */
-void hoc_opt_block_model(const hoc_opt *o, size_t b, hoc_opt_scratch *s, double *f, double *g, double *H) {
+void hoc_opt_block_model(const hoc_opt *o, size_t b, hoc_opt_scratch *s, double *f, double *g,
+                         double *H) {
   const hoc_mesh *m = o->m;
   int np = o->np, nd = (int)(o->B->bd_start[b + 1] - o->B->bd_start[b]);
   int carries = o->B->carry_start[b + 1] > o->B->carry_start[b];
@@ -137,7 +138,8 @@ static int relaxed_uv(const hoc_opt *o, size_t e) {
 
 /* Local objective of block b at its trial (nodes flagged moving); 0 if the
  * trial breaks a rule. */
-static int block_trial_flagged(const hoc_opt *o, size_t b, hoc_opt_scratch *s, double fmax, double *f) {
+static int block_trial_flagged(const hoc_opt *o, size_t b, hoc_opt_scratch *s, double fmax,
+                               double *f) {
   const hoc_mesh *m = o->m;
   *f = 0;
   for (size_t a = o->B->bn_start[b]; a < o->B->bn_start[b + 1]; ++a) {
@@ -149,7 +151,8 @@ static int block_trial_flagged(const hoc_opt *o, size_t b, hoc_opt_scratch *s, d
   for (size_t a = o->B->be_start[b]; a < o->B->be_start[b + 1]; ++a) {
     size_t e = o->B->be_elem[a];
     hoc_opt_gather(o, e, s->x, s->n);
-    if (o->el.pvalid[e] && o->adj.on_boundary[e] && !relaxed_uv(o, e) && !hoc_opt_param_valid(o, e, s->uv))
+    if (o->el.pvalid[e] && o->adj.on_boundary[e] && !relaxed_uv(o, e) &&
+        !hoc_opt_param_valid(o, e, s->uv))
       return 0;
     double smin;
     int nr = hoc_opt_elem_residuals(o, e, s->x, s->n, NULL, s->r, NULL, &smin);
@@ -163,7 +166,8 @@ static int block_trial_flagged(const hoc_opt *o, size_t b, hoc_opt_scratch *s, d
     size_t e = o->B->be_elem[a];
     if (!o->el.valid[e] || relaxed(o, e)) continue;
     hoc_opt_gather(o, e, s->x, s->n);
-    if (hoc_element_nodes_tangled(o->t, s->x, s->n, o->cfg.exact || (hoc_opt_guarded(o, e) && o->el.xvalid[e])))
+    if (hoc_element_nodes_tangled(o->t, s->x, s->n,
+                                  o->cfg.exact || (hoc_opt_guarded(o, e) && o->el.xvalid[e])))
       return 0;
   }
   return 1;
@@ -185,7 +189,8 @@ static int near_tangled(const hoc_opt *o, size_t b) {
 
 /* One colour: a Gauss-Newton step per active block, then a common
  * backtracking line search. *moved counts the nodes moved. */
-hoc_status hoc_opt_do_color(hoc_opt *o, int color, hoc_opt_scratch *scr, int nthreads, size_t *moved) {
+hoc_status hoc_opt_do_color(hoc_opt *o, int color, hoc_opt_scratch *scr, int nthreads,
+                            size_t *moved) {
   hoc_mesh *m = o->m;
   size_t n = hoc_opt_select_active(o, color);
   *moved = 0;
@@ -195,7 +200,8 @@ hoc_status hoc_opt_do_color(hoc_opt *o, int color, hoc_opt_scratch *scr, int nth
   for (size_t a = 0; a < n; ++a) {
     size_t b = list[a];
     hoc_opt_scratch *s = &scr[omp_get_thread_num()];
-    for (size_t c = o->B->bn_start[b]; c < o->B->bn_start[b + 1]; ++c) o->node.active[o->B->bn_node[c]] = 0;
+    for (size_t c = o->B->bn_start[b]; c < o->B->bn_start[b + 1]; ++c)
+      o->node.active[o->B->bn_node[c]] = 0;
     int nd = (int)(o->B->bd_start[b + 1] - o->B->bd_start[b]);
     double f;
     hoc_opt_block_model(o, b, s, &f, s->g, s->H);
@@ -211,7 +217,8 @@ hoc_status hoc_opt_do_color(hoc_opt *o, int color, hoc_opt_scratch *scr, int nth
       size_t k = o->B->bn_node[c];
       const double *dz = o->node.dz + 6 * k, *sk = st + o->B->node_off[k];
       double dx[3];
-      for (int d = 0; d < 3; ++d) dx[d] = dz[d] * sk[0] + (o->adj.ndof[k] == 2 ? dz[3 + d] * sk[1] : 0);
+      for (int d = 0; d < 3; ++d)
+        dx[d] = dz[d] * sk[0] + (o->adj.ndof[k] == 2 ? dz[3 + d] * sk[1] : 0);
       double len = sqrt(dx[0] * dx[0] + dx[1] * dx[1] + dx[2] * dx[2]);
       len_max = fmax(len_max, len / o->adj.hsize[k]);
     }
@@ -227,7 +234,8 @@ hoc_status hoc_opt_do_color(hoc_opt *o, int color, hoc_opt_scratch *scr, int nth
   size_t n_eval = 0;
   for (size_t a = 0; a < nt; ++a) {
     size_t b = list[a];
-    n_eval += o->B->bn_start[b + 1] - o->B->bn_start[b] + o->B->carry_start[b + 1] - o->B->carry_start[b];
+    n_eval +=
+        o->B->bn_start[b + 1] - o->B->bn_start[b] + o->B->carry_start[b + 1] - o->B->carry_start[b];
   }
   size_t *elist = hoc_calloc(n_eval + 1, sizeof *elist), n_committed = 0;
   HOC_CHECK(elist, HOC_ERR_MEMORY, "out of memory");
@@ -236,10 +244,13 @@ hoc_status hoc_opt_do_color(hoc_opt *o, int color, hoc_opt_scratch *scr, int nth
     size_t ne_list = 0;
     for (size_t a = 0; a < nt; ++a) {
       size_t b = list[a];
-      for (int tries = 0; tries < HOC_OPT_RANGE_HALVINGS && !hoc_opt_set_trial_params(o, b); ++tries)
+      for (int tries = 0; tries < HOC_OPT_RANGE_HALVINGS && !hoc_opt_set_trial_params(o, b);
+           ++tries)
         o->trial.alpha[b] *= HOC_OPT_BACKTRACK;
-      for (size_t c = o->B->bn_start[b]; c < o->B->bn_start[b + 1]; ++c) elist[ne_list++] = o->B->bn_node[c];
-      for (size_t j = o->B->carry_start[b]; j < o->B->carry_start[b + 1]; ++j) elist[ne_list++] = o->B->carry_node[j];
+      for (size_t c = o->B->bn_start[b]; c < o->B->bn_start[b + 1]; ++c)
+        elist[ne_list++] = o->B->bn_node[c];
+      for (size_t j = o->B->carry_start[b]; j < o->B->carry_start[b + 1]; ++j)
+        elist[ne_list++] = o->B->carry_node[j];
     }
     HOC_TRY_GOTO(hoc_opt_eval_trials(o, elist, ne_list, nthreads), done);
 #pragma omp parallel for schedule(dynamic, 8) num_threads(nthreads)
@@ -247,10 +258,13 @@ hoc_status hoc_opt_do_color(hoc_opt *o, int color, hoc_opt_scratch *scr, int nth
       size_t b = list[a];
       hoc_opt_scratch *s = &scr[omp_get_thread_num()];
       double f;
-      int ok = block_trial(o, b, s, o->trial.f0[b] + HOC_OPT_ARMIJO * o->trial.alpha[b] * o->trial.slope[b], &f);
+      int ok = block_trial(
+          o, b, s, o->trial.f0[b] + HOC_OPT_ARMIJO * o->trial.alpha[b] * o->trial.slope[b], &f);
       if (ok) {
-        for (size_t c = o->B->bn_start[b]; c < o->B->bn_start[b + 1]; ++c) hoc_opt_commit(o, o->B->bn_node[c]);
-        for (size_t j = o->B->carry_start[b]; j < o->B->carry_start[b + 1]; ++j) hoc_opt_commit(o, o->B->carry_node[j]);
+        for (size_t c = o->B->bn_start[b]; c < o->B->bn_start[b + 1]; ++c)
+          hoc_opt_commit(o, o->B->bn_node[c]);
+        for (size_t j = o->B->carry_start[b]; j < o->B->carry_start[b + 1]; ++j)
+          hoc_opt_commit(o, o->B->carry_node[j]);
         o->trial.fnew[b] = f;
         o->trial.state[b] = 2;
       } else {
@@ -270,7 +284,9 @@ hoc_status hoc_opt_do_color(hoc_opt *o, int color, hoc_opt_scratch *scr, int nth
       *moved += nodes;
       /* only a significant move wakes the neighbourhood (small ones would
        * spread waves of smaller ones through the whole mesh) */
-      if (o->trial.f0[b] - o->trial.fnew[b] < o->cfg.wake_factor * o->cfg.min_gain * (double)nodes && !near_tangled(o, b))
+      if (o->trial.f0[b] - o->trial.fnew[b] <
+              o->cfg.wake_factor * o->cfg.min_gain * (double)nodes &&
+          !near_tangled(o, b))
         continue;
       /* wake every node of the elements it touches (itself included) */
       for (size_t c = o->B->be_start[b]; c < o->B->be_start[b + 1]; ++c) {
@@ -291,9 +307,10 @@ hoc_status hoc_opt_do_color(hoc_opt *o, int color, hoc_opt_scratch *scr, int nth
       size_t e = o->B->be_elem[c];
       if (!o->el.valid[e] || !o->el.xvalid[e]) {
         hoc_opt_gather(o, e, s->x, s->n);
-        if (!o->el.valid[e]) o->el.valid[e] = (unsigned char)!hoc_element_tangled(o->t, s->x, s->n, o->cfg.exact);
-        o->el.xvalid[e] =
-            o->el.valid[e] && (o->cfg.exact || !hoc_opt_guarded(o, e) || !hoc_element_folded(o->t, s->x, s->n));
+        if (!o->el.valid[e])
+          o->el.valid[e] = (unsigned char)!hoc_element_tangled(o->t, s->x, s->n, o->cfg.exact);
+        o->el.xvalid[e] = o->el.valid[e] && (o->cfg.exact || !hoc_opt_guarded(o, e) ||
+                                             !hoc_element_folded(o->t, s->x, s->n));
       }
       if (!o->el.pvalid[e]) o->el.pvalid[e] = (unsigned char)hoc_opt_param_valid(o, e, s->uv);
     }

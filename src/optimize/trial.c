@@ -27,7 +27,8 @@ static hoc_status face_normal(const hoc_opt *o, int f, const double *uv, const d
     double p[2];
     for (int d = 0; d < 2; ++d) {
       double mid = 0.5 * (face->lo[d] + face->hi[d]);
-      p[d] = uv[d] + HOC_OPT_NORMAL_OFFSET * (face->hi[d] - face->lo[d]) * (mid > uv[d] ? 1.0 : -1.0);
+      p[d] =
+          uv[d] + HOC_OPT_NORMAL_OFFSET * (face->hi[d] - face->lo[d]) * (mid > uv[d] ? 1.0 : -1.0);
     }
     HOC_TRY(hoc_cad_face_eval(o->model, f, 1, p, NULL, a, b));
     hoc_opt_cross(a, b, c);
@@ -79,7 +80,8 @@ int hoc_opt_set_trial_params(hoc_opt *o, size_t b) {
       for (int d = 0; d < 2; ++d) {
         double v = m->param[2 * k + d] + al * st[off + d];
         o->trial.tpar[2 * k + d] = v;
-        if (!(f->period[d] > 0) && !param_ok(m->param[2 * k + d], v, f->lo[d], f->hi[d])) inside = 0;
+        if (!(f->period[d] > 0) && !param_ok(m->param[2 * k + d], v, f->lo[d], f->hi[d]))
+          inside = 0;
       }
     } else {
       const hoc_cad_curve *c = &o->model->curves[m->entity[k]];
@@ -108,15 +110,16 @@ hoc_status hoc_opt_eval_trial(hoc_opt *o, size_t i) {
   const hoc_model *model = o->model;
   int ent = m->entity[i];
   if (m->dim[i] == HOC_ON_FACE) {
-    HOC_TRY(hoc_cad_face_eval(model, ent, 1, o->trial.tpar + 2 * i, o->trial.txyz + 3 * i, o->trial.tdz + 6 * i,
-                              o->trial.tdz + 6 * i + 3));
+    HOC_TRY(hoc_cad_face_eval(model, ent, 1, o->trial.tpar + 2 * i, o->trial.txyz + 3 * i,
+                              o->trial.tdz + 6 * i, o->trial.tdz + 6 * i + 3));
     size_t s = o->adj.ns_slot[o->adj.ns_start[i]];
     o->trial.tslot_uv[2 * s] = o->trial.tpar[2 * i];
     o->trial.tslot_uv[2 * s + 1] = o->trial.tpar[2 * i + 1];
-    HOC_TRY(face_normal(o, ent, o->trial.tpar + 2 * i, o->trial.tdz + 6 * i, o->trial.tdz + 6 * i + 3,
-                        o->trial.tnormal + 3 * s));
+    HOC_TRY(face_normal(o, ent, o->trial.tpar + 2 * i, o->trial.tdz + 6 * i,
+                        o->trial.tdz + 6 * i + 3, o->trial.tnormal + 3 * s));
   } else {
-    HOC_TRY(hoc_cad_curve_eval(model, ent, 1, o->trial.tpar + 2 * i, o->trial.txyz + 3 * i, o->trial.tdz + 6 * i));
+    HOC_TRY(hoc_cad_curve_eval(model, ent, 1, o->trial.tpar + 2 * i, o->trial.txyz + 3 * i,
+                               o->trial.tdz + 6 * i));
     o->trial.tdz[6 * i + 3] = o->trial.tdz[6 * i + 4] = o->trial.tdz[6 * i + 5] = 0;
     for (size_t j = o->adj.ns_start[i]; j < o->adj.ns_start[i + 1]; ++j) {
       size_t s = o->adj.ns_slot[j];
@@ -145,7 +148,8 @@ hoc_status hoc_opt_eval_trial(hoc_opt *o, size_t i) {
  * node twice), on nthreads threads. */
 hoc_status hoc_opt_eval_trials(hoc_opt *o, const size_t *list, size_t n, int nthreads) {
   hoc_par_error err = {0};
-#pragma omp parallel for schedule(dynamic, 4) num_threads(nthreads) if (n > 8 && o->model->thread_safe)
+#pragma omp parallel for schedule(dynamic, 4)                                                      \
+    num_threads(nthreads) if (n > 8 && o->model->thread_safe)
   for (size_t c = 0; c < n; ++c)
     hoc_par_error_catch(&err, hoc_opt_eval_trial(o, list[c]));
   return hoc_par_error_raise(&err);
@@ -184,7 +188,8 @@ int hoc_opt_line_monotone(const hoc_opt *o, size_t l) {
 void hoc_opt_commit(hoc_opt *o, size_t k) {
   hoc_mesh *m = o->m;
   int np = o->np;
-  for (size_t a = o->adj.ne_start[k]; a < o->adj.ne_start[k + 1]; ++a) o->el.dirty[o->adj.ne_elem[a]] = 1;
+  for (size_t a = o->adj.ne_start[k]; a < o->adj.ne_start[k + 1]; ++a)
+    o->el.dirty[o->adj.ne_elem[a]] = 1;
   for (size_t a = o->adj.ne_start[k]; a < o->adj.ne_start[k + 1]; ++a) {
     size_t e = o->adj.ne_elem[a];
     int kk = o->adj.ne_local[a];
