@@ -381,7 +381,7 @@ static void test_best_state_kept(void) {
   CHECK_OK(hoc_mesh_optimize(m, &o, &res));
   /* still tangled after 10 sweeps: a second attempt of 5 from the best
    * state of the first (the whole run's fewest is returned) */
-  CHECK(res.second_attempt == 11);
+  CHECK(res.diagnostics.second_attempt == 11);
   CHECK(log.n > 10 && log.n <= 15 && res.iterations == log.n);
   for (int i = 0; i < log.n; ++i) CHECK(log.attempt[i] == (i < 10 ? 1 : 2));
   size_t fewest = res.tangled_initial, fewest_first = fewest;
@@ -391,7 +391,7 @@ static void test_best_state_kept(void) {
     if (i < 10 && log.count[i] < fewest_first) fewest_first = log.count[i];
     if (i && i < 10 && log.count[i] > log.count[i - 1]) rose = 1;
   }
-  /* above order 5 the first phase relaxes nothing (optimize.c, relaxed):
+  /* above order 5 the first phase relaxes nothing (optimize/step.c, relaxed):
    * no valid element may turn tangled at the samples, so the count never
    * rises there (before that rule it rose here, 4 -> more, and the best
    * state was restored; an exact phase still may) */
@@ -686,10 +686,10 @@ static void test_protected_run(void) {
     hoc_quality_stats st;
     CHECK_OK(hoc_mesh_measure(m, HOC_MEASURE_SHAPE, NULL, NULL, &st));
     printf("gmsh's order-2 bottle: %zu tangled -> %zu in %d sweeps, protected run from sweep %d\n",
-           res.tangled_initial, res.tangled_final, res.iterations, res.protected_run);
-    CHECK(res.protected_run == 0 || (res.protected_run > 1 && res.protected_run <= res.iterations));
+           res.tangled_initial, res.tangled_final, res.iterations, res.diagnostics.protected_run);
+    CHECK(res.diagnostics.protected_run == 0 || (res.diagnostics.protected_run > 1 && res.diagnostics.protected_run <= res.iterations));
     /* (a sweep that only starts the second attempt is not reported) */
-    CHECK(log.increasing && log.n > res.protected_run && log.last == res.iterations);
+    CHECK(log.increasing && log.n > res.diagnostics.protected_run && log.last == res.iterations);
     CHECK(st.tangled == res.tangled_final && res.tangled_final < res.tangled_initial);
     double dist;
     CHECK_OK(hoc_mesh_max_cad_distance(m, &dist));

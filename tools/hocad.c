@@ -661,9 +661,9 @@ static int optimize_stage(const options *o, report *r, hoc_mesh *mesh,
   double t0 = now();
   hoc_status st = hoc_mesh_optimize(mesh, &oo, &res);
   if (st != HOC_OK) return fail(st, 0);
-  if (res.polished && !o->quiet)
+  if (res.diagnostics.polished && !o->quiet)
     fprintf(stderr, "%s: note: the final polish untangled %zu element(s) the sweeps left\n",
-            program, res.polished);
+            program, res.diagnostics.polished);
   int code = measure_stage(o, r, "optimized", mesh, now() - t0, NULL);
   if (code) return code;
   stage *s = &r->stages[r->n - 1];
@@ -672,11 +672,11 @@ static int optimize_stage(const options *o, report *r, hoc_mesh *mesh,
   s->converged = res.converged;
   s->stopped_at_limit = res.stopped_at_limit;
   s->best_iteration = res.best_iteration;
-  s->second_attempt = res.second_attempt;
-  s->exact_phase = res.exact_phase;
-  s->protected_run = res.protected_run;
-  s->polished = res.polished;
-  s->fragile = res.fragile;
+  s->second_attempt = res.diagnostics.second_attempt;
+  s->exact_phase = res.diagnostics.exact_phase;
+  s->protected_run = res.diagnostics.protected_run;
+  s->polished = res.diagnostics.polished;
+  s->fragile = res.diagnostics.fragile;
   s->objective_initial = res.objective_initial;
   s->objective = res.objective_final;
   return EXIT_OK;

@@ -92,7 +92,7 @@ hoc_status hoc_mesh_optimize(hoc_mesh *mesh, const hoc_optimize_options *options
       status = hoc_opt_run(mesh, options, 1, a.iterations, t0, &b, &limited_b);
     }
     if (status == HOC_OK && b.tangled_final < a.tangled_final) {
-      b.protected_run = a.iterations + 1;
+      b.diagnostics.protected_run = a.iterations + 1;
       b.tangled_initial = a.tangled_initial;
       b.objective_initial = a.objective_initial;
       a = b;

@@ -130,7 +130,7 @@ static hoc_status begin(run *r) {
   o->cfg.exact = 1;
   HOC_TRY(hoc_opt_sweep_start(o, &r->f, &r->qmin, &r->tangled));
   r->res.tangled_initial = r->tangled;
-  r->res.fragile = mark_fragile(o);
+  r->res.diagnostics.fragile = mark_fragile(o);
   o->cfg.exact = o->adj.touched != NULL;
   HOC_TRY(restart_state(r));
   r->res.objective_initial = r->f;
@@ -298,7 +298,7 @@ static hoc_status second_attempt(run *r, int *started) {
   new_attempt(r, HOC_OPT_LATER_SWEEPS(r->opts.max_iterations));
   hoc_opt_wake_all(o);
   HOC_TRY(restore(r, &r->best));
-  r->res.second_attempt = r->it + 1;
+  r->res.diagnostics.second_attempt = r->it + 1;
   return HOC_OK;
 }
 
@@ -319,7 +319,7 @@ static hoc_status exact_phase(run *r, phase *next) {
   HOC_TRY(restart_state(r));
   *next = PHASE_POLISH;
   if (!(r->tangled > sampled && (!sampled || !r->res.stopped_at_limit))) return HOC_OK;
-  r->res.exact_phase = r->it + 1;
+  r->res.diagnostics.exact_phase = r->it + 1;
   HOC_TRY(hoc_opt_snapshot_take(&r->best, r->mesh, r->tangled, r->f));
   r->fewest = r->tangled;
   r->res.converged = 0;
@@ -365,7 +365,7 @@ static hoc_status polish_phase(run *r, phase *next) {
   HOC_TRY(hoc_opt_sweep_start(o, &r->f, &r->qmin, &r->tangled));
   if (r->tangled >= before) /* none untangled: the sweeps' state, whose shapes are better */
     return restore(r, &r->pre);
-  r->res.polished += before - r->tangled;
+  r->res.diagnostics.polished += before - r->tangled;
   if (r->tangled || r->smoothing) return HOC_OK;
   /* all valid now: sweeps again, which keep every element valid, smooth
    * the polished patches (their elements come out of the search barely
