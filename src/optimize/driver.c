@@ -72,17 +72,14 @@ hoc_status hoc_mesh_optimize(hoc_mesh *mesh, const hoc_optimize_options *options
   hoc_status status = hoc_opt_snapshot_take(&start, mesh, 0, 0);
   if (status == HOC_OK) status = hoc_opt_run(mesh, options, 0, 0, t0, &a, &limited);
   /* Left tangled (not for want of sweeps): a protected run from the start,
-   * in which the first phase's steps may not fold an element between
+   * in which the sampled phase's steps may not fold an element between
    * samples that the exact test finds valid, kept if it leaves fewer
-   * tangled. Not always: the unprotected first phase passes through such
-   * folds on its way to better meshes (t20 at order 5: min q 0.49, 0.12
-   * protected), but on gmsh's coarse meshes its folds between samples
-   * outrun the exact phase (gmsh 5.0's order-3 bottle: 11 left, 7
-   * protected, and 0 after four splits). Not above order 5: there every
-   * trial of its first phase runs the exact tests, whose cost grows as
-   * p^4 (the aircraft at order 10: 8-24 s a sweep of the exact phase,
-   * 0.4-4 s of the first), and `hocad` splits what is left anyway. Not in
-   * a local repair (free_elements): it runs the exact test from its first
+   * tangled. Not the first choice: the unprotected sampled phase passes
+   * through such folds on its way to better meshes (on thin parts a
+   * markedly higher final min q); but on coarse meshes its folds between
+   * samples can outrun the exact phase, and the protected run leaves
+   * fewer. Not above HOC_OPT_PROTECT_MAX_ORDER (tunables.h), and not in a
+   * local repair (free_elements): it runs the exact test from its first
    * sweep, as a protected run would, so that run would only repeat it. */
   if (status == HOC_OK && a.tangled_final && !limited && mesh->order <= HOC_OPT_PROTECT_MAX_ORDER &&
       !(options && options->free_elements)) {

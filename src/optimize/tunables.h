@@ -87,7 +87,7 @@
  * step.c). */
 #define HOC_OPT_EPS_RAISED 2e-3
 
-/* Orders above this have no protected run (every trial of its first phase
+/* Orders above this have no protected run (every trial of its sampled phase
  * runs the exact tests, whose cost grows as p^4: at order 10 a sweep of
  * the exact phase costs several times one of the sampled phase), relax tangled regions
  * only in the exact phase (in the sampled phase their folds between the
