@@ -87,11 +87,12 @@
  * step.c). */
 #define HOC_OPT_EPS_RAISED 2e-3
 
-/* Orders above this have no protected run (every trial of its sampled phase
- * runs the exact tests, whose cost grows as p^4: at order 10 a sweep of
- * the exact phase costs several times one of the sampled phase), relax tangled regions
- * only in the exact phase (in the sampled phase their folds between the
- * samples outnumber the folds they open), and guard fragile elements. */
+/* Orders above this have no protected run (every trial of its sampled
+ * phase runs the exact tests, whose cost grows as p^4: at order 10 a sweep
+ * of the exact phase costs several times one of the sampled phase), relax
+ * tangled regions only in the exact phase (in the sampled phase their
+ * folds between the samples outnumber the folds they open), and guard
+ * fragile elements. */
 #define HOC_OPT_PROTECT_MAX_ORDER 5
 
 /* Above PROTECT_MAX_ORDER, in a whole-mesh run, a valid element with q
