@@ -207,63 +207,93 @@ static inline void hoc_opt_cross(const double *a, const double *b, double *c) {
   c[2] = a[0] * b[1] - a[1] * b[0];
 }
 
-/* Seconds on a monotonic clock. */
-double hoc_opt_now(void);
+/* setup.c: adjacency, unknowns, state arrays ---------------------------- */
 
-/* Setup: adjacency, unknowns, state arrays ------------------------------- */
-
+/* Clears *o and sets it up for mesh m: adjacency, each node's unknowns (only
+ * the nodes of free_elements and free_rings rings around them if given),
+ * both block families, every state array. */
 hoc_status hoc_opt_setup(hoc_opt *o, hoc_mesh *m, hoc_measure measure, int fix_curves,
                          const unsigned char *free_elements, int free_rings);
 void hoc_opt_free(hoc_opt *o);
+/* Derivatives dx/dz of every free node and the normals of every slot. */
 hoc_status hoc_opt_eval_all(hoc_opt *o);
+/* Compressed rows: start[n+1] and items[total] allocated; counts summed
+ * into starts; starts shifted back after filling. */
 hoc_status hoc_opt_csr_alloc(size_t n, size_t total, size_t **start, size_t **items);
 void hoc_opt_csr_finish_counts(size_t n, size_t *start);
 void hoc_opt_csr_restore(size_t n, size_t *start);
+/* elem[n_elems] grown by `rings` rings of elements; node[n_nodes]: their nodes. */
 void hoc_opt_grow_rings(const hoc_mesh *m, unsigned char *elem, unsigned char *node, int rings);
 hoc_status hoc_grow_push(hoc_growlist *g, size_t x);
 
-/* Blocks: families, carried nodes, colours, sleeping and waking --------- */
+/* blocks.c: families, carried nodes, colours, sleeping and waking ------- */
 
+/* Family 0: vertices (carrying their stars), edges, interiors; 1: nodes. */
 hoc_status hoc_opt_build_blocks(hoc_opt *o, int family);
+/* Weight with which block b (of o->B) carries node (0: not carried). */
 double hoc_opt_carry_weight(const hoc_opt *o, size_t b, size_t node);
+/* Flags block b's nodes and carried nodes as moving (v = 1) or not. */
 void hoc_opt_set_moving(hoc_opt *o, size_t b, unsigned char v);
+/* Node k awake, its blocks of both families queued on their colours. */
 void hoc_opt_wake_node(hoc_opt *o, size_t k);
+/* Every block of both families may be active: each colour scans all. */
 void hoc_opt_wake_all(hoc_opt *o);
+/* o->node.near: within HOC_OPT_NEAR_RINGS rings of a tangled element. */
 void hoc_opt_mark_near(hoc_opt *o);
+/* The active blocks of a colour of o->B into o->trial.list; their number. */
 size_t hoc_opt_select_active(hoc_opt *o, int color);
 
-/* Objective: element residuals, per-sweep state, screening -------------- */
+/* objective.c: element residuals, per-sweep state, screening ------------ */
 
+/* x[np][3], n[np][3] of element e (trial state of moving nodes). */
 void hoc_opt_gather(const hoc_opt *o, size_t e, double *x, double *n);
+/* Element e not folded in (u, v) (trial state of moving nodes); uv[np][2] scratch. */
 int hoc_opt_param_valid(const hoc_opt *o, size_t e, double *uv);
+/* Residuals r (and their Jacobian J if not NULL) of element e; their number. */
 int hoc_opt_elem_residuals(const hoc_opt *o, size_t e, const double *x, const double *n,
                            const unsigned char *need, double *r, double *J, double *smin);
+/* Per-element state at a sweep's start; f, smallest q and tangled count. */
 hoc_status hoc_opt_sweep_start(hoc_opt *o, double *objective, double *min_q, size_t *tangled);
+/* Puts nodes with nothing to gain to sleep (before the first sweep). */
 hoc_status hoc_opt_screen(hoc_opt *o);
 
-/* Trial state: parameters, CAD evaluation, acceptance -------------------- */
+/* trial.c: trial parameters, CAD evaluation, acceptance ----------------- */
 
+/* (u, v) of node k's copy kk in element e in the trial state. */
 void hoc_opt_trial_elem_uv(const hoc_opt *o, size_t k, size_t e, int kk, double *uv);
+/* Trial parameters of block b at its step length; 0 if one leaves a range. */
 int hoc_opt_set_trial_params(hoc_opt *o, size_t b);
+/* CAD evaluation of node i's trial; of list[0..n) on nthreads threads. */
 hoc_status hoc_opt_eval_trial(hoc_opt *o, size_t i);
 hoc_status hoc_opt_eval_trials(hoc_opt *o, const size_t *list, size_t n, int nthreads);
+/* Line l's nodes strictly in order along its curve (trial state of moving nodes). */
 int hoc_opt_line_monotone(const hoc_opt *o, size_t l);
+/* Accepts node k's trial. */
 void hoc_opt_commit(hoc_opt *o, size_t k);
 
-/* Steps: block model, damped Gauss-Newton, line search ------------------- */
+/* step.c: block model, damped Gauss-Newton, line search ----------------- */
 
+/* Local f, gradient g[nd] and Gauss-Newton matrix H[nd][nd] of block b. */
 void hoc_opt_block_model(const hoc_opt *o, size_t b, hoc_opt_scratch *s, double *f, double *g,
                          double *H);
+/* One colour of o->B: a step per active block, a common line search. */
 hoc_status hoc_opt_do_color(hoc_opt *o, int color, hoc_opt_scratch *scr, int nthreads,
                             size_t *moved);
+/* Scratch of nthreads threads (*out set even on failure: free it). */
 hoc_status hoc_opt_scratch_alloc(const hoc_opt *o, int nthreads, hoc_opt_scratch **out);
 void hoc_opt_scratch_free(hoc_opt_scratch *s, int nthreads);
 
-/* Polish, runs, snapshots ------------------------------------------------ */
+/* polish.c, phases.c, driver.c ------------------------------------------ */
 
+/* The polish of the elements the exact test finds tangled. */
 hoc_status hoc_opt_polish(hoc_opt *o);
+/* One run from the mesh as it is; protect: a protected run; sweeps
+ * numbered from it0 + 1, seconds from t0; *limited: its sampled phase used
+ * all its sweeps with elements still tangled. */
 hoc_status hoc_opt_run(hoc_mesh *mesh, const hoc_optimize_options *options, int protect, int it0,
                        double t0, hoc_optimize_result *result, int *limited);
+/* Seconds on a monotonic clock. */
+double hoc_opt_now(void);
 hoc_status hoc_opt_snapshot_take(hoc_opt_snapshot *s, const hoc_mesh *m, size_t tangled, double f);
 void hoc_opt_snapshot_restore(const hoc_opt_snapshot *s, hoc_mesh *m);
 void hoc_opt_snapshot_free(hoc_opt_snapshot *s);
