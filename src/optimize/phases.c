@@ -48,7 +48,8 @@ static size_t mark_fragile(hoc_opt *o) {
  *   SECOND_ATTEMPT  the sweeps of an attempt ran out, or stalled, with
  *                   elements still tangled: half as many sweeps again from
  *                   the best state reached, the (u, v) rule relaxed too
- *                   (relaxed_uv in step.c). At most once per sweeping phase.
+ *                   (relaxed_uv in step.c). At most one before the exact
+ *                   phase and one from its start on.
  *   EXACT           the samples' verdict is in, but the exact fold tests of
  *                   measuring find more elements tangled: sweeps with the
  *                   exact tests in every verdict and dense edge residuals.
