@@ -102,7 +102,7 @@ int main(int argc, char **argv) {
   }
   printf("result: %zu tangled, min q %.4f, mean q %.4f; %d sweeps (fewest at %d), %zu by the "
          "polish, %.1f s\n",
-         s.tangled, s.min, s.mean, r.iterations, r.best_iteration, r.polished, r.seconds);
+         s.tangled, s.min, s.mean, r.iterations, r.best_iteration, r.diagnostics.polished, r.seconds);
   if (argc > 4 && hoc_mesh_write_msh(fine, argv[4]) != HOC_OK) {
     code = fail(argv[4]);
     goto done;

@@ -307,7 +307,7 @@ typedef int (*hoc_optimize_progress_fn)(void *user, const hoc_optimize_iteration
 
 typedef struct hoc_optimize_options {
   hoc_measure measure;  /**< distortion measure (default shape) */
-  int fix_curves;       /**< 1: nodes on CAD curves stay where they are (the seed's choice) */
+  int fix_curves;       /**< 1: nodes on CAD curves stay where they are (the paper's choice) */
   int max_iterations;   /**< sweeps (0: 100); if elements are still tangled after them
                              (or after 40 sweeps without a new fewest tangled count), a
                              second attempt of up to half as many more restarts from the
@@ -336,14 +336,12 @@ typedef struct hoc_optimize_options {
 
 void hoc_optimize_options_default(hoc_optimize_options *options);
 
-typedef struct hoc_optimize_result {
-  int iterations;
-  int converged;        /**< a stopping rule of `tolerance` met, no tangled element */
-  double objective_initial, objective_final;
-  size_t tangled_initial, tangled_final;
-  int best_iteration;   /**< sweep after which the returned mesh's tangled count was
-                             first reached (0: the start); long before `iterations`
-                             when untangling stalled */
+/** How a run went inside: the phases the optimiser went through and what
+ *  its internal rules did. For diagnostics, reports and tests only: NOT a
+ *  stable interface (fields may change meaning, appear or go with the
+ *  algorithm). Sweep numbers count as hoc_optimize_result.iterations does;
+ *  0: that phase did not happen. */
+typedef struct hoc_optimize_diagnostics {
   int second_attempt;   /**< first sweep of the second attempt (0: none was needed) */
   int exact_phase;      /**< first sweep of the exact phase: sweeps after the samples
                              said untangled but the exact edge test found folds between
@@ -352,19 +350,32 @@ typedef struct hoc_optimize_result {
                              in which steps may not fold an element between samples that the
                              exact test finds valid (made when the first left elements
                              tangled; 0: the first run is kept) */
-  int stopped_at_limit; /**< elements were still tangled when the last attempt had used all
-                             its sweeps (not ended early by the 40-sweep stall rule or by
-                             every node sleeping) */
   size_t polished;      /**< elements the final polish untangled: a pattern search, node by node,
                              on the exact verdict around each element the sweeps left tangled
                              (when at most 32 are) */
-  size_t free_nodes;    /**< nodes the optimiser could move */
   size_t fragile;       /**< elements guarded as fragile: above order 5, those valid at the start
                              with q < 0.1, which no step may fold between the samples */
+} hoc_optimize_diagnostics;
+
+/** What a run of the optimiser did (stable fields), and its diagnostics
+ *  (unstable, see hoc_optimize_diagnostics). */
+typedef struct hoc_optimize_result {
+  int iterations;       /**< sweeps made (numbered on through every phase and run) */
+  int converged;        /**< a stopping rule of `tolerance` met, no tangled element */
+  double objective_initial, objective_final;
+  size_t tangled_initial, tangled_final; /**< by the exact test, as hoc_mesh_measure counts */
+  int best_iteration;   /**< sweep after which the returned mesh's tangled count was
+                             first reached (0: the start); long before `iterations`
+                             when untangling stalled */
+  int stopped_at_limit; /**< elements were still tangled when the last attempt had used all
+                             its sweeps (not ended early by the 40-sweep stall rule or by
+                             every node sleeping) */
+  size_t free_nodes;    /**< nodes the optimiser could move */
   double seconds;
+  hoc_optimize_diagnostics diagnostics; /**< unstable: see hoc_optimize_diagnostics */
 } hoc_optimize_result;
 
-/** Untangle and smooth at once (the seed's Section 4): minimise
+/** Untangle and smooth at once (the paper's Section 4): minimise
  *  f = sum_e int_{t_I} (eta - 1)^2 over the parametric coordinates of the
  *  free nodes, with the regularised determinant of Escobar et al. while an
  *  element is tangled. Face-interior nodes move in their face's (u, v),
@@ -374,8 +385,12 @@ typedef struct hoc_optimize_result {
  *  except next to a fold while untangling stalls (docs/quality.md). The
  *  tangle test looks at samples until they say untangled, then, if the
  *  exact fold test of measuring finds folds between them, at the exact
- *  test too for the sweeps after (result.exact_phase); tangled_final
- *  counts by the exact test, as hoc_mesh_measure does.
+ *  test too for the sweeps after (result.diagnostics.exact_phase);
+ *  tangled_final counts by the exact test, as hoc_mesh_measure does. A run
+ *  that leaves elements tangled (not for want of sweeps) is followed, up to
+ *  order 5 and outside a local repair, by a protected run from the same
+ *  start whose steps may not fold a valid element between the samples; the
+ *  one leaving fewer tangled is kept (result.diagnostics.protected_run).
  *  Deterministic, whatever the thread count.
  *  @param[in,out] mesh  the mesh, changed in place: the final state, or, if
  *                       that has more tangled elements than an earlier one,

@@ -95,7 +95,7 @@ static void check_kind(hoc_analytic_kind kind, double a, double b, int nu, int n
   /* the samples' untangling needs no second attempt; the exact phase
    * (folds between the samples: the cylinder's, at corners on its rims)
    * may */
-  CHECK((r.second_attempt == 0 || (r.exact_phase && r.second_attempt > r.exact_phase)) &&
+  CHECK((r.diagnostics.second_attempt == 0 || (r.diagnostics.exact_phase && r.diagnostics.second_attempt > r.diagnostics.exact_phase)) &&
         !r.stopped_at_limit);
   CHECK(after.min > 0.3);
   CHECK_OK(hoc_mesh_check_gradient(m, HOC_MEASURE_SHAPE, 0, 50, &gerr));
@@ -189,10 +189,10 @@ static void check_second_attempt(void) {
   hoc_optimize_result r;
   CHECK_OK(hoc_mesh_optimize(m, &o, &r));
   printf("second attempt: %zu tangled -> %zu in %d sweeps (second from sweep %d)\n",
-         r.tangled_initial, r.tangled_final, r.iterations, r.second_attempt);
+         r.tangled_initial, r.tangled_final, r.iterations, r.diagnostics.second_attempt);
   CHECK(r.tangled_initial > 0);
-  CHECK(r.tangled_final > 0 ? r.second_attempt == 3 && r.iterations == 3 : r.second_attempt == 0);
-  CHECK(r.second_attempt > 0); /* this mesh needs more than two sweeps */
+  CHECK(r.tangled_final > 0 ? r.diagnostics.second_attempt == 3 && r.iterations == 3 : r.diagnostics.second_attempt == 0);
+  CHECK(r.diagnostics.second_attempt > 0); /* this mesh needs more than two sweeps */
   CHECK(r.stopped_at_limit == (r.tangled_final > 0)); /* both attempts used their sweeps */
   CHECK(r.tangled_final <= r.tangled_initial);
   hoc_quality_stats st;
@@ -323,8 +323,8 @@ static void check_local(void) {
    * (nothing is relaxed in it) and no protected run (it runs the exact
    * test from its first sweep already), so it ends with its first run */
   printf("local, fold outside: %d sweeps, second attempt at %d, protected run at %d\n",
-         r.iterations, r.second_attempt, r.protected_run);
-  CHECK(r.second_attempt == 0 && r.protected_run == 0);
+         r.iterations, r.diagnostics.second_attempt, r.diagnostics.protected_run);
+  CHECK(r.diagnostics.second_attempt == 0 && r.diagnostics.protected_run == 0);
   int sweeps = r.iterations;
   hoc_mesh_destroy(&m);
   CHECK_OK(hoc_mesh_copy(before, &m));
@@ -343,7 +343,7 @@ out:
   hoc_model_destroy(&model);
 }
 
-/* Fragile elements (hoc_optimize_result.fragile): above order 5 a whole-mesh
+/* Fragile elements (hoc_optimize_diagnostics.fragile): above order 5 a whole-mesh
  * run guards the elements that start valid with q < 0.1, as a protected run
  * guards every element: none may fold between the samples. A plane: a
  * needle (height 0.05 over an edge of length 2 between two fixed CAD
@@ -376,8 +376,8 @@ static void check_fragile(void) {
     CHECK_OK(hoc_mesh_optimize(m, NULL, &r));
     CHECK_OK(hoc_mesh_measure(m, HOC_MEASURE_SHAPE, q1, NULL, &st));
     printf("fragile, order %d: %zu fragile; q %.4f %.4f %.4f -> %.4f %.4f %.4f, %d sweeps\n", p,
-           r.fragile, q0[0], q0[1], q0[2], q1[0], q1[1], q1[2], r.iterations);
-    CHECK(r.fragile == (p > 5 ? 1u : 0u));
+           r.diagnostics.fragile, q0[0], q0[1], q0[2], q1[0], q1[1], q1[2], r.iterations);
+    CHECK(r.diagnostics.fragile == (p > 5 ? 1u : 0u));
     CHECK(st.tangled == 0 && r.tangled_final == 0);
     CHECK(q1[0] > q0[0]);
     hoc_mesh_destroy(&m);

@@ -1,8 +1,8 @@
 /* hocad: the command-line tool. Options, progress, printing and exit codes
  * live here; the work is done by libhocad.
  * SPDX-License-Identifier: GPL-2.0-or-later */
-#include "core/cli_support.h"
 #include "hocad.h"
+#include "core/cli_support.h"
 
 #include <errno.h>
 #include <math.h>
@@ -19,12 +19,12 @@
 /* Exit codes (documented in README.md and --help). */
 enum {
   EXIT_OK = 0,
-  EXIT_USAGE = 1,       /* bad command line */
-  EXIT_INPUT = 2,       /* model or mesh file missing, unreadable, corrupt or mismatched */
-  EXIT_OUTPUT = 3,      /* an output file cannot be written */
-  EXIT_PARTIAL = 4,     /* some faces could not be meshed; the rest was written */
-  EXIT_TANGLED = 5,     /* tangled elements remain in the written mesh */
-  EXIT_FAILURE_ = 6,    /* meshing failed, out of memory, or an internal error */
+  EXIT_USAGE = 1,    /* bad command line */
+  EXIT_INPUT = 2,    /* model or mesh file missing, unreadable, corrupt or mismatched */
+  EXIT_OUTPUT = 3,   /* an output file cannot be written */
+  EXIT_PARTIAL = 4,  /* some faces could not be meshed; the rest was written */
+  EXIT_TANGLED = 5,  /* tangled elements remain in the written mesh */
+  EXIT_FAILURE_ = 6, /* meshing failed, out of memory, or an internal error */
   EXIT_INTERRUPTED = 130
 };
 
@@ -106,7 +106,7 @@ static int parse_view(const char *s, double view[3]) {
   static const struct {
     const char *name;
     double d[3];
-  } named[] = {{"iso", {1, 1, 1}},   {"front", {0, -1, 0}}, {"back", {0, 1, 0}},
+  } named[] = {{"iso", {1, 1, 1}},   {"front", {0, -1, 0}},  {"back", {0, 1, 0}},
                {"top", {0, 0, 1}},   {"bottom", {0, 0, -1}}, {"side", {1, 0, 0}},
                {"left", {-1, 0, 0}}, {"right", {1, 0, 0}}};
   for (size_t k = 0; k < sizeof named / sizeof *named; ++k)
@@ -165,20 +165,20 @@ static const char *opt_value(int argc, char **argv, int *i, const char *name, in
 }
 
 #define OPTIMIZE_OPTIONS                                                                           \
-  "  --fix-curves         keep nodes on CAD curves fixed (the paper's choice);\n"                   \
+  "  --fix-curves         keep nodes on CAD curves fixed (the paper's choice);\n"                  \
   "                       by default they slide along their curve\n"                               \
   "  --max-iterations N   optimizer sweeps (default 100); if elements are still\n"                 \
   "                       tangled then, a second attempt of up to N/2 more\n"                      \
   "  --check-gradient     compare the analytic gradient with finite differences\n"
 
-#define PICTURE_OPTIONS(size_option)                                                      \
-  "  --view V             iso | front | back | top | bottom | side | left | right |\n"         \
-  "                       x,y,z (direction towards the eye; default iso)\n"                   \
-  "  " size_option " WxH\n"                                                                 \
-  "                       picture size in pixels (default 1600x1200; stages side\n"          \
-  "                       by side 2700x1000)\n"                                              \
-  "  --zoom-worst         frame the worst elements instead of the whole model\n"             \
-  "  --no-edges           do not draw element edges\n"                                        \
+#define PICTURE_OPTIONS(size_option)                                                               \
+  "  --view V             iso | front | back | top | bottom | side | left | right |\n"             \
+  "                       x,y,z (direction towards the eye; default iso)\n"                        \
+  "  " size_option " WxH\n"                                                                        \
+  "                       picture size in pixels (default 1600x1200; stages side\n"                \
+  "                       by side 2700x1000)\n"                                                    \
+  "  --zoom-worst         frame the worst elements instead of the whole model\n"                   \
+  "  --no-edges           do not draw element edges\n"                                             \
   "  --transparent        transparent background instead of white\n"
 
 static const char *usage_render =
@@ -192,11 +192,10 @@ static const char *usage_render =
     "options:\n"
     "  -o, --output F.png   the picture\n"
     "  --model MODEL        the CAD model the mesh lies on\n"
-    "  --histogram F.png    also a histogram of q\n"
-    PICTURE_OPTIONS("--size")
-    "  --measure M          shape | oddy (default shape)\n"
-    "  --threads N          threads (default: all cores)\n"
-    "  -q, --quiet          print only errors\n";
+    "  --histogram F.png    also a histogram of q\n" PICTURE_OPTIONS(
+        "--size") "  --measure M          shape | oddy (default shape)\n"
+                  "  --threads N          threads (default: all cores)\n"
+                  "  -q, --quiet          print only errors\n";
 
 static const char *usage_main =
     "usage: hocad <command> [options]\n"
@@ -335,8 +334,10 @@ static int parse(int argc, char **argv, options *o, const char **pos, int max_po
     if (!strcmp(a, "-q") || !strcmp(a, "--quiet")) {
       o->quiet = 1;
     } else if (VALUE("--measure")) {
-      if (!strcmp(v, "shape")) o->pipe.measure = HOC_MEASURE_SHAPE;
-      else if (!strcmp(v, "oddy")) o->pipe.measure = HOC_MEASURE_ODDY;
+      if (!strcmp(v, "shape"))
+        o->pipe.measure = HOC_MEASURE_SHAPE;
+      else if (!strcmp(v, "oddy"))
+        o->pipe.measure = HOC_MEASURE_ODDY;
       else {
         error_line("--measure expects shape or oddy, got '%s'", v);
         return 0;
@@ -392,9 +393,12 @@ static int parse(int argc, char **argv, options *o, const char **pos, int max_po
         return 0;
       }
     } else if (mesh && VALUE("--nodes")) {
-      if (!strcmp(v, "equispaced")) o->pipe.nodeset = HOC_NODES_EQUISPACED;
-      else if (!strcmp(v, "fekete")) o->pipe.nodeset = HOC_NODES_FEKETE;
-      else if (!strcmp(v, "warp-blend")) o->pipe.nodeset = HOC_NODES_WARP_BLEND;
+      if (!strcmp(v, "equispaced"))
+        o->pipe.nodeset = HOC_NODES_EQUISPACED;
+      else if (!strcmp(v, "fekete"))
+        o->pipe.nodeset = HOC_NODES_FEKETE;
+      else if (!strcmp(v, "warp-blend"))
+        o->pipe.nodeset = HOC_NODES_WARP_BLEND;
       else {
         error_line("--nodes expects equispaced, fekete or warp-blend, got '%s'", v);
         return 0;
@@ -442,7 +446,10 @@ static void progress(const options *o, const char *fmt, ...) {
 /* A repair, note or warning from the library, on stderr. */
 static void say(hoc_event_kind kind, const char *message) {
   fprintf(stderr, "%s: %s%s\n", program,
-          kind == HOC_EVENT_NOTE ? "note: " : kind == HOC_EVENT_WARNING ? "warning: " : "", message);
+          kind == HOC_EVENT_NOTE      ? "note: "
+          : kind == HOC_EVENT_WARNING ? "warning: "
+                                      : "",
+          message);
 }
 
 /* The pipelines' events: progress and sweeps on a terminal, repairs and
@@ -453,8 +460,8 @@ static int on_event(void *user, const hoc_event *ev) {
     progress(o, "%s", ev->message);
   else if (ev->kind == HOC_EVENT_CHECK && !o->quiet)
     printf("%s\n", ev->message);
-  else if (ev->kind == HOC_EVENT_WARNING || (!o->quiet && ev->kind != HOC_EVENT_STAGE &&
-                                              ev->kind != HOC_EVENT_CHECK))
+  else if (ev->kind == HOC_EVENT_WARNING ||
+           (!o->quiet && ev->kind != HOC_EVENT_STAGE && ev->kind != HOC_EVENT_CHECK))
     say(ev->kind, ev->message);
   return 0;
 }
@@ -475,7 +482,8 @@ static void print_table(const hoc_report *r) {
     if (!res) continue;
     printf("%s: %d iterations, objective %.6g -> %.6g%s", s->name, s->iterations,
            s->objective_initial, s->objective, s->converged ? ", converged" : ", not converged");
-    if (res->polished) printf(", %zu untangled by the final polish", res->polished);
+    if (res->diagnostics.polished)
+      printf(", %zu untangled by the final polish", res->diagnostics.polished);
     printf("\n");
   }
 }

@@ -143,7 +143,7 @@ hoc_status hoc_mesh_slot_normals(const hoc_mesh *mesh, double *normal);
  *  nu x nv cells of its parameter domain, split into triangles, order 1. */
 hoc_status hoc_mesh_grid_linear(hoc_model *model, int nu, int nv, hoc_mesh **mesh);
 
-/** The optimiser's final polish alone (optimize/optimize.c): a pattern
+/** The optimiser's final polish alone (optimize/polish.c): a pattern
  *  search, node by node in the parametric coordinates, around each element
  *  the exact test finds tangled (when at most 32 are), keeping only moves
  *  that untangle elements or shrink their negative sigma without tangling

@@ -49,10 +49,10 @@ hoc_status hoc_repair_optimize(const hoc_run *run, hoc_stages *r, const char *na
   hoc_optimize_result res;
   double t0 = hoc_pipeline_now();
   HOC_TRY(hoc_mesh_optimize(mesh, &oo, &res));
-  if (res.polished)
+  if (res.diagnostics.polished)
     HOC_TRY(hoc_run_event(run, HOC_EVENT_NOTE,
                           "the final polish untangled %zu element(s) the sweeps left",
-                          res.polished));
+                          res.diagnostics.polished));
   return hoc_run_stage(run, r, name, mesh, hoc_pipeline_now() - t0, NULL, &res);
 }
 

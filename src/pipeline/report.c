@@ -296,8 +296,9 @@ hoc_status hoc_report_json(const hoc_report *report, const hoc_report_files *fil
                "\"polished\": %zu, \"fragile\": %zu, \"objective_initial\": %.17g, "
                "\"objective\": %.17g",
                s->iterations, s->converged ? "true" : "false", res->best_iteration,
-               res->second_attempt, res->exact_phase, res->protected_run, res->polished,
-               res->fragile, s->objective_initial, s->objective);
+               res->diagnostics.second_attempt, res->diagnostics.exact_phase,
+               res->diagnostics.protected_run, res->diagnostics.polished, res->diagnostics.fragile,
+               s->objective_initial, s->objective);
     text_add(&t, "}");
   }
   text_add(&t,

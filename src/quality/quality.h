@@ -122,7 +122,7 @@ double hoc_element_quality(const hoc_quality_tables *t, hoc_measure measure, con
                            const double *n, double *eta, double *min_sigma);
 
 /** hoc_element_quality with the exact edge test only if `exact` (the
- *  optimiser's first phase checks the samples alone: see optimize.c). */
+ *  optimiser's first phase checks the samples alone: see optimize/phases.c). */
 double hoc_element_quality_test(const hoc_quality_tables *t, hoc_measure measure, const double *x,
                                 const double *n, int exact, double *eta, double *min_sigma);
 

@@ -1,0 +1,302 @@
+/* The optimiser's blocks: the two families (the natural blocks of the
+ * high-order mesh, and single nodes), the nodes a vertex block carries,
+ * the colouring that lets blocks of a colour move in parallel, and the
+ * queues of blocks woken since their colour last ran.
+ * SPDX-License-Identifier: GPL-2.0-or-later
+ */
+#include "optimize/optimize_impl.h"
+#include "optimize/tunables.h"
+
+#include <float.h>
+#include <math.h>
+#include <omp.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* Blocks of family 0: vertices, edges, element interiors; of family 1:
+ * single nodes. Their nodes, footprints, unknowns and carried nodes. */
+hoc_status hoc_opt_build_blocks(hoc_opt *o, int family) {
+  hoc_opt_blockset *B = &o->fam[family];
+  hoc_mesh *m = o->m;
+  size_t nn = m->n_nodes, ne = m->n_elems, np = (size_t)o->np;
+  int p = m->order;
+  HOC_ALLOC(B->node_block, nn);
+  HOC_ALLOC(B->node_off, nn);
+  for (size_t i = 0; i < nn; ++i) B->node_block[i] = SIZE_MAX;
+  hoc_growlist start = {0}, nodes = {0};
+  hoc_status status = HOC_OK;
+  /* vertex blocks first, then edge blocks, then interior blocks */
+  for (int kind = 0; kind < 3; ++kind)
+    for (size_t e = 0; e < ne; ++e) {
+      if (family == 1) { /* every free node alone, in element order */
+        if (kind) break;
+        const size_t *cn = m->conn + e * np;
+        for (size_t k = 0; k < np; ++k) {
+          size_t i = cn[k];
+          if (!o->adj.ndof[i] || B->node_block[i] != SIZE_MAX) continue;
+          B->node_block[i] = start.n;
+          HOC_TRY_GOTO(hoc_grow_push(&start, nodes.n), done);
+          HOC_TRY_GOTO(hoc_grow_push(&nodes, i), done);
+        }
+        continue;
+      }
+      const size_t *cn = m->conn + e * np;
+      if (kind == 0) {
+        for (int k = 0; k < 3; ++k) {
+          size_t i = cn[k];
+          if (!o->adj.ndof[i] || B->node_block[i] != SIZE_MAX) continue;
+          B->node_block[i] = start.n;
+          HOC_TRY_GOTO(hoc_grow_push(&start, nodes.n), done);
+          HOC_TRY_GOTO(hoc_grow_push(&nodes, i), done);
+        }
+      } else if (kind == 1) {
+        /* an edge seen from its second element has its nodes in a block already */
+        for (int k = 0; k < 3 && p > 1; ++k) {
+          size_t first = nodes.n;
+          for (int j = 0; j < p - 1; ++j) {
+            size_t i = cn[3 + k * (p - 1) + j];
+            if (!o->adj.ndof[i] || B->node_block[i] != SIZE_MAX) continue;
+            if (nodes.n == first) HOC_TRY_GOTO(hoc_grow_push(&start, nodes.n), done);
+            B->node_block[i] = start.n - 1;
+            HOC_TRY_GOTO(hoc_grow_push(&nodes, i), done);
+          }
+        }
+      } else {
+        size_t first = nodes.n;
+        for (size_t k = 3 * (size_t)p; k < np; ++k) {
+          size_t i = cn[k];
+          if (!o->adj.ndof[i] || B->node_block[i] != SIZE_MAX) continue;
+          if (nodes.n == first) HOC_TRY_GOTO(hoc_grow_push(&start, nodes.n), done);
+          B->node_block[i] = start.n - 1;
+          HOC_TRY_GOTO(hoc_grow_push(&nodes, i), done);
+        }
+      }
+    }
+  size_t nb = start.n;
+  B->n_blocks = nb;
+  HOC_TRY_GOTO(hoc_grow_push(&start, nodes.n), done);
+  B->bn_start = start.v;
+  B->bn_node = nodes.v;
+  start.v = nodes.v = NULL;
+  /* unknowns */
+  B->bd_start = hoc_calloc(nb + 1, sizeof *B->bd_start);
+  if (!B->bd_start) {
+    status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
+    goto done;
+  }
+  for (size_t b = 0; b < nb; ++b) {
+    int off = 0;
+    for (size_t a = B->bn_start[b]; a < B->bn_start[b + 1]; ++a) {
+      B->node_off[B->bn_node[a]] = off;
+      off += o->adj.ndof[B->bn_node[a]];
+    }
+    B->bd_start[b + 1] = B->bd_start[b] + (size_t)off;
+    if (off > B->max_nd) B->max_nd = off;
+  }
+  /* footprints: the elements of the block's nodes */
+  {
+    hoc_growlist fs = {0}, fe = {0};
+    for (size_t b = 0; b < nb && status == HOC_OK; ++b) {
+      status = hoc_grow_push(&fs, fe.n);
+      for (size_t a = B->bn_start[b]; a < B->bn_start[b + 1] && status == HOC_OK; ++a) {
+        size_t i = B->bn_node[a];
+        for (size_t c = o->adj.ne_start[i]; c < o->adj.ne_start[i + 1] && status == HOC_OK; ++c) {
+          size_t e = o->adj.ne_elem[c];
+          int seen = 0;
+          for (size_t d = fs.v[b]; d < fe.n && !seen; ++d) seen = fe.v[d] == e;
+          if (!seen) status = hoc_grow_push(&fe, e);
+        }
+      }
+    }
+    if (status == HOC_OK) status = hoc_grow_push(&fs, fe.n);
+    B->be_start = fs.v;
+    B->be_elem = fe.v;
+    if (status != HOC_OK) goto done;
+  }
+  /* carried nodes of face-interior vertex blocks */
+  {
+    hoc_growlist cs = {0}, cn = {0};
+    double *w = NULL;
+    size_t wcap = 0;
+    size_t *last = hoc_realloc(NULL, nn + 1, sizeof *last); /* block that last took the node */
+    if (!last) status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
+    for (size_t i = 0; last && i <= nn; ++i)
+      last[i] = SIZE_MAX;
+    for (size_t b = 0; b < nb && status == HOC_OK; ++b) {
+      status = hoc_grow_push(&cs, cn.n);
+      size_t k = B->bn_node[B->bn_start[b]];
+      int vertex = family == 0 && B->bn_start[b + 1] - B->bn_start[b] == 1 && p >= 2 &&
+                   o->adj.ndof[k] == 2;
+      for (size_t a = o->adj.ne_start[k]; a < o->adj.ne_start[k + 1] && vertex; ++a)
+        vertex = o->adj.ne_local[a] < 3;
+      if (!vertex) continue;
+      for (size_t a = o->adj.ne_start[k]; a < o->adj.ne_start[k + 1] && status == HOC_OK; ++a) {
+        size_t e = o->adj.ne_elem[a];
+        int kk = o->adj.ne_local[a];
+        for (size_t i = 3; i < np && status == HOC_OK; ++i) {
+          size_t node = m->conn[e * np + i];
+          if (o->adj.ndof[node] != 2 || m->entity[node] != m->entity[k] || last[node] == b)
+            continue;
+          double r = o->t->rs[2 * i], s = o->t->rs[2 * i + 1];
+          double lam = kk == 0 ? 1 - r - s : kk == 1 ? r : s;
+          if (!(lam > HOC_OPT_CARRY_MIN_WEIGHT)) continue;
+          last[node] = b;
+          status = hoc_grow_push(&cn, node);
+          if (status != HOC_OK) break;
+          if (cn.n > wcap) {
+            wcap = cn.cap;
+            double *w2 = hoc_realloc(w, wcap, sizeof *w2);
+            if (!w2) {
+              status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
+              break;
+            }
+            w = w2;
+          }
+          w[cn.n - 1] = lam;
+        }
+      }
+    }
+    free(last);
+    if (status == HOC_OK) status = hoc_grow_push(&cs, cn.n);
+    B->carry_start = cs.v;
+    B->carry_node = cn.v;
+    B->carry_w = w;
+    if (status != HOC_OK) goto done;
+  }
+  /* colours: blocks touching a common element differ; every element's
+   * blocks are the blocks of its nodes */
+  {
+    int *color = hoc_calloc(nb + 1, sizeof *color);
+    size_t cap = 64, *stamp = hoc_calloc(cap, sizeof *stamp);
+    int max_colors = 0;
+    if (!color || !stamp) {
+      free(color);
+      free(stamp);
+      status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
+      goto done;
+    }
+    for (size_t b = 0; b < nb; ++b) color[b] = -1;
+    for (size_t b = 0; b < nb && status == HOC_OK; ++b) {
+      for (size_t a = B->be_start[b]; a < B->be_start[b + 1]; ++a) {
+        const size_t *cn = m->conn + B->be_elem[a] * np;
+        for (size_t k = 0; k < np; ++k) {
+          size_t b2 = B->node_block[cn[k]];
+          if (b2 != SIZE_MAX && color[b2] >= 0) stamp[color[b2]] = b + 1;
+        }
+      }
+      int c = 0;
+      while ((size_t)c < cap && stamp[c] == b + 1) ++c;
+      if ((size_t)c >= cap) {
+        size_t *s2 = hoc_realloc(stamp, 2 * cap, sizeof *s2);
+        if (!s2) {
+          status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
+          break;
+        }
+        stamp = s2;
+        memset(stamp + cap, 0, cap * sizeof *stamp);
+        cap *= 2;
+      }
+      color[b] = c;
+      if (c + 1 > max_colors) max_colors = c + 1;
+    }
+    B->n_colors = max_colors;
+    if (status == HOC_OK)
+      status = hoc_opt_csr_alloc((size_t)max_colors, nb, &B->color_start, &B->color_block);
+    if (status == HOC_OK) {
+      for (size_t b = 0; b < nb; ++b) B->color_start[color[b] + 1]++;
+      hoc_opt_csr_finish_counts((size_t)max_colors, B->color_start);
+      for (size_t b = 0; b < nb; ++b) B->color_block[B->color_start[color[b]]++] = b;
+      hoc_opt_csr_restore((size_t)max_colors, B->color_start);
+    }
+    if (status == HOC_OK) {
+      B->block_color = color;
+      color = NULL;
+      B->queue_head = hoc_calloc((size_t)max_colors + 1, sizeof *B->queue_head);
+      B->queue_next = hoc_calloc(nb + 1, sizeof *B->queue_next);
+      B->queued = hoc_calloc(nb + 1, 1);
+      B->scan_all = hoc_calloc((size_t)max_colors + 1, 1);
+      if (!B->queue_head || !B->queue_next || !B->queued || !B->scan_all)
+        status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
+      for (int c = 0; c < max_colors && status == HOC_OK; ++c) {
+        B->queue_head[c] = SIZE_MAX;
+        B->scan_all[c] = 1;
+      }
+    }
+    free(color);
+    free(stamp);
+  }
+done:
+  free(start.v);
+  free(nodes.v);
+  return status;
+}
+
+double hoc_opt_carry_weight(const hoc_opt *o, size_t b, size_t node) {
+  for (size_t j = o->B->carry_start[b]; j < o->B->carry_start[b + 1]; ++j)
+    if (o->B->carry_node[j] == node) return o->B->carry_w[j];
+  return 0;
+}
+
+void hoc_opt_set_moving(hoc_opt *o, size_t b, unsigned char v) {
+  for (size_t a = o->B->bn_start[b]; a < o->B->bn_start[b + 1]; ++a)
+    o->node.moving[o->B->bn_node[a]] = v;
+  for (size_t j = o->B->carry_start[b]; j < o->B->carry_start[b + 1]; ++j)
+    o->node.moving[o->B->carry_node[j]] = v;
+}
+
+static int block_active(const hoc_opt *o, size_t b) {
+  int act = 0, near = !o->cfg.local;
+  for (size_t a = o->B->bn_start[b]; a < o->B->bn_start[b + 1]; ++a) {
+    act |= o->node.active[o->B->bn_node[a]];
+    near |= o->node.near[o->B->bn_node[a]];
+  }
+  return act && near;
+}
+
+/* Node k is active again: its blocks of both families go on their colours'
+ * queues. */
+void hoc_opt_wake_node(hoc_opt *o, size_t k) {
+  o->node.active[k] = 1;
+  for (int f = 0; f < 2; ++f) {
+    hoc_opt_blockset *B = &o->fam[f];
+    size_t b = B->node_block[k];
+    if (b == SIZE_MAX || B->queued[b]) continue;
+    B->queued[b] = 1;
+    int c = B->block_color[b];
+    B->queue_next[b] = B->queue_head[c];
+    B->queue_head[c] = b;
+  }
+}
+
+/* Every block may be active (after a change of every node's flag). */
+void hoc_opt_wake_all(hoc_opt *o) {
+  for (int f = 0; f < 2; ++f)
+    memset(o->fam[f].scan_all, 1, (size_t)o->fam[f].n_colors);
+}
+
+/* Flags the nodes within HOC_OPT_NEAR_RINGS rings of a tangled element. */
+void hoc_opt_mark_near(hoc_opt *o) {
+  for (size_t e = 0; e < o->m->n_elems; ++e) o->el.near_e[e] = !o->el.valid[e];
+  hoc_opt_grow_rings(o->m, o->el.near_e, o->node.near, HOC_OPT_NEAR_RINGS);
+}
+
+/* The blocks of a colour with an active node into o->trial.list (in an order that
+ * does not matter: blocks of one colour share no element); returns their
+ * number. Empties the colour's queue. */
+size_t hoc_opt_select_active(hoc_opt *o, int color) {
+  hoc_opt_blockset *B = o->B;
+  size_t n = 0;
+  for (size_t b = B->queue_head[color], next; b != SIZE_MAX; b = next) {
+    next = B->queue_next[b];
+    B->queued[b] = 0;
+    if (!B->scan_all[color] && block_active(o, b)) o->trial.list[n++] = b;
+  }
+  B->queue_head[color] = SIZE_MAX;
+  if (B->scan_all[color]) {
+    B->scan_all[color] = 0;
+    for (size_t a = B->color_start[color]; a < B->color_start[color + 1]; ++a)
+      if (block_active(o, B->color_block[a])) o->trial.list[n++] = B->color_block[a];
+  }
+  return n;
+}

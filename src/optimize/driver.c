@@ -1,0 +1,106 @@
+/* hoc_mesh_optimize: a run, and a protected run when the first leaves
+ * elements tangled; the snapshots of the mesh state both keep.
+ * SPDX-License-Identifier: GPL-2.0-or-later
+ */
+#include "optimize/optimize_impl.h"
+#include "optimize/tunables.h"
+
+#include <float.h>
+#include <math.h>
+#include <omp.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+double hoc_opt_now(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+void hoc_optimize_options_default(hoc_optimize_options *o) {
+  if (!o) return;
+  memset(o, 0, sizeof *o);
+  o->measure = HOC_MEASURE_SHAPE;
+  o->max_iterations = HOC_OPT_DEFAULT_MAX_ITERATIONS;
+  o->tolerance = HOC_OPT_DEFAULT_TOLERANCE;
+}
+
+void hoc_opt_snapshot_free(hoc_opt_snapshot *s) {
+  free(s->param);
+  free(s->xyz);
+  free(s->slot_uv);
+  free(s->elem_uv);
+  free(s->line_t);
+}
+
+/* Copy src of n doubles into *dst (allocated on first use). */
+static hoc_status keep(double **dst, const double *src, size_t n) {
+  if (!*dst) *dst = hoc_realloc(NULL, n + 1, sizeof **dst);
+  HOC_CHECK(*dst, HOC_ERR_MEMORY, "out of memory for the best mesh reached");
+  memcpy(*dst, src, n * sizeof **dst);
+  return HOC_OK;
+}
+
+hoc_status hoc_opt_snapshot_take(hoc_opt_snapshot *s, const hoc_mesh *m, size_t tangled, double f) {
+  HOC_TRY(keep(&s->param, m->param, 2 * m->n_nodes));
+  HOC_TRY(keep(&s->xyz, m->xyz, 3 * m->n_nodes));
+  HOC_TRY(keep(&s->slot_uv, m->slot_uv, 2 * m->n_slots));
+  HOC_TRY(keep(&s->elem_uv, m->elem_uv, 2 * m->n_elems * (size_t)m->np));
+  HOC_TRY(keep(&s->line_t, m->line_t, 2 * m->n_lines));
+  s->tangled = tangled;
+  s->objective = f;
+  return HOC_OK;
+}
+
+void hoc_opt_snapshot_restore(const hoc_opt_snapshot *s, hoc_mesh *m) {
+  memcpy(m->param, s->param, 2 * m->n_nodes * sizeof *s->param);
+  memcpy(m->xyz, s->xyz, 3 * m->n_nodes * sizeof *s->xyz);
+  memcpy(m->slot_uv, s->slot_uv, 2 * m->n_slots * sizeof *s->slot_uv);
+  memcpy(m->elem_uv, s->elem_uv, 2 * m->n_elems * (size_t)m->np * sizeof *s->elem_uv);
+  memcpy(m->line_t, s->line_t, 2 * m->n_lines * sizeof *s->line_t);
+}
+
+hoc_status hoc_mesh_optimize(hoc_mesh *mesh, const hoc_optimize_options *options,
+                             hoc_optimize_result *result) {
+  HOC_CHECK(mesh, HOC_ERR_ARGUMENT, "no mesh given");
+  double t0 = hoc_opt_now();
+  hoc_opt_snapshot start = {0}, first = {0};
+  hoc_optimize_result a = {0}, b = {0};
+  int limited = 0, limited_b;
+  hoc_status status = hoc_opt_snapshot_take(&start, mesh, 0, 0);
+  if (status == HOC_OK) status = hoc_opt_run(mesh, options, 0, 0, t0, &a, &limited);
+  /* Left tangled (not for want of sweeps): a protected run from the start,
+   * in which the sampled phase's steps may not fold an element between
+   * samples that the exact test finds valid, kept if it leaves fewer
+   * tangled. Not the first choice: the unprotected sampled phase passes
+   * through such folds on its way to better meshes (on thin parts a
+   * markedly higher final min q); but on coarse meshes its folds between
+   * samples can outrun the exact phase, and the protected run leaves
+   * fewer. Not above HOC_OPT_PROTECT_MAX_ORDER (tunables.h), and not in a
+   * local repair (free_elements): it runs the exact test from its first
+   * sweep, as a protected run would, so that run would only repeat it. */
+  if (status == HOC_OK && a.tangled_final && !limited && mesh->order <= HOC_OPT_PROTECT_MAX_ORDER &&
+      !(options && options->free_elements)) {
+    status = hoc_opt_snapshot_take(&first, mesh, a.tangled_final, a.objective_final);
+    if (status == HOC_OK) {
+      hoc_opt_snapshot_restore(&start, mesh);
+      status = hoc_opt_run(mesh, options, 1, a.iterations, t0, &b, &limited_b);
+    }
+    if (status == HOC_OK && b.tangled_final < a.tangled_final) {
+      b.diagnostics.protected_run = a.iterations + 1;
+      b.tangled_initial = a.tangled_initial;
+      b.objective_initial = a.objective_initial;
+      a = b;
+    } else if (first.param) {
+      hoc_opt_snapshot_restore(&first, mesh); /* (also when the protected run failed) */
+      if (status == HOC_OK) a.iterations = b.iterations; /* sweeps made, though not kept */
+    }
+  }
+  a.seconds = hoc_opt_now() - t0;
+  hoc_opt_snapshot_free(&start);
+  hoc_opt_snapshot_free(&first);
+  if (result && status == HOC_OK) *result = a;
+  return status;
+}

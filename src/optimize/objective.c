@@ -1,0 +1,286 @@
+/* The objective: element residuals (regularised on the tangled region),
+ * the per-element state at the start of a sweep, and the screening that
+ * puts nodes with nothing to gain to sleep before the first sweep.
+ * SPDX-License-Identifier: GPL-2.0-or-later
+ */
+#include "optimize/optimize_impl.h"
+#include "optimize/tunables.h"
+
+#include <float.h>
+#include <math.h>
+#include <omp.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* Positions and normals of element e's nodes: the trial state of nodes
+ * flagged `moving`, else the current one. */
+void hoc_opt_gather(const hoc_opt *o, size_t e, double *x, double *n) {
+  const hoc_mesh *m = o->m;
+  size_t np = (size_t)o->np;
+  const size_t *cn = m->conn + e * np, *sl = m->elem_slot + e * np;
+  for (size_t i = 0; i < np; ++i) {
+    int mv = o->node.moving[cn[i]];
+    memcpy(x + 3 * i, (mv ? o->trial.txyz : m->xyz) + 3 * cn[i], 3 * sizeof *x);
+    memcpy(n + 3 * i, (mv ? o->trial.tnormal : o->node.normal) + 3 * sl[i], 3 * sizeof *n);
+  }
+}
+
+/* Element not folded in the (u,v) plane: orient * det(D u(xi)) > 0 at its
+ * nodes (trial state of `moving` nodes). uv: [np][2] scratch. */
+int hoc_opt_param_valid(const hoc_opt *o, size_t e, double *uv) {
+  const hoc_mesh *m = o->m;
+  int np = o->np;
+  const size_t *cn = m->conn + e * (size_t)np;
+  memcpy(uv, m->elem_uv + 2 * e * (size_t)np, 2 * (size_t)np * sizeof *uv);
+  for (int i = 0; i < np; ++i)
+    if (o->node.moving[cn[i]]) hoc_opt_trial_elem_uv(o, cn[i], e, i, uv + 2 * i);
+  double sign = m->face_orient[m->elem_face[e]] < 0 ? -1.0 : 1.0;
+  for (int j = 0; j < np; ++j) {
+    const double *g = o->t->Gn + 2 * (size_t)j * np;
+    double a = 0, b = 0, c = 0, d = 0;
+    for (int i = 0; i < np; ++i) {
+      a += uv[2 * i] * g[2 * i];
+      b += uv[2 * i] * g[2 * i + 1];
+      c += uv[2 * i + 1] * g[2 * i];
+      d += uv[2 * i + 1] * g[2 * i + 1];
+    }
+    if (!(sign * (a * d - b * c) > 0)) return 0;
+  }
+  return 1;
+}
+
+/* Smallest sigma and the size scale mean(|D phi|^2 / 2) of an element. */
+static void sigma_stats(const hoc_opt *o, const double *x, const double *n, double *smin,
+                        double *scale) {
+  const hoc_quality_tables *t = o->t;
+  int np = t->np;
+  double mn = INFINITY, sum = 0;
+  for (int q = 0; q < t->nq + np; ++q) {
+    const double *G = q < t->nq ? t->G + 2 * (size_t)q * np : t->Gn + 2 * (size_t)(q - t->nq) * np;
+    double a1[3] = {0, 0, 0}, a2[3] = {0, 0, 0}, nq[3] = {0, 0, 0}, c[3];
+    for (int i = 0; i < np; ++i)
+      for (int k = 0; k < 3; ++k) {
+        a1[k] += G[2 * i] * x[3 * i + k];
+        a2[k] += G[2 * i + 1] * x[3 * i + k];
+      }
+    if (q < t->nq) {
+      for (int i = 0; i < np; ++i)
+        for (int k = 0; k < 3; ++k) nq[k] += t->N[(size_t)q * np + i] * n[3 * i + k];
+    } else {
+      memcpy(nq, n + 3 * (q - t->nq), sizeof nq);
+    }
+    hoc_opt_cross(a1, a2, c);
+    double cl = sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+    double sig = c[0] * nq[0] + c[1] * nq[1] + c[2] * nq[2] > 0 ? cl : -cl;
+    mn = fmin(mn, sig);
+    if (q < t->nq)
+      sum += t->w[q] * 0.5 * (a1[0] * a1[0] + a1[1] * a1[1] + a1[2] * a1[2] + a2[0] * a2[0] +
+                              a2[1] * a2[1] + a2[2] * a2[2]);
+  }
+  *smin = mn;
+  *scale = sum;
+}
+
+/* Residuals of element e's objective: the quadrature points, and in the
+ * tangled region also the nodes and validation points (the tangle test
+ * asks det > 0 there too) and, where only the exact tests find the element
+ * folded, the point where they found it. r: [nq + np + nv + 1],
+ * J: [nq + np + nv + 1][np][3] or NULL. Returns the count and sets
+ * *smin to the smallest sigma / |D phi|^2 over the quadrature points. */
+int hoc_opt_elem_residuals(const hoc_opt *o, size_t e, const double *x, const double *n,
+                          const unsigned char *need, double *r, double *J, double *smin) {
+  int nq = o->nq, np = o->np;
+  double s = hoc_element_residuals(o->t, o->measure, x, n, o->el.delta[e], need, r, J);
+  if (smin) *smin = s;
+  if (!o->el.region[e]) return nq;
+  hoc_element_node_residuals(o->t, o->measure, x, n, o->el.delta[e], o->cfg.exact, need, r + nq,
+                             J ? J + 3 * (size_t)nq * (size_t)np : NULL);
+  int count = nq + hoc_element_node_points(o->t, o->cfg.exact);
+  if (!o->el.has_fold[e]) return count;
+  /* weighted as one of the node residuals */
+  hoc_element_point_residual(o->t, o->measure, x, n, o->el.delta[e], o->el.fold_rs + 2 * e,
+                             1.0 / hoc_element_node_points(o->t, o->cfg.exact), need, r + count,
+                             J ? J + 3 * (size_t)count * (size_t)np : NULL);
+  return count + 1;
+}
+
+/* Per-element state at the start of a sweep: validity, parametric
+ * validity, regularisation; also f, q and the tangled count. */
+hoc_status hoc_opt_sweep_start(hoc_opt *o, double *objective, double *min_q, size_t *tangled) {
+  hoc_mesh *m = o->m;
+  size_t ne = m->n_elems;
+  int np = o->np, nq = o->nq;
+  double *fe = o->el.fe, *qe = o->el.qe;
+  int failed = 0;
+  /* elements whose nodes moved: q, validity, their own regularisation */
+#pragma omp parallel
+  {
+    double *x = malloc((6 * (size_t)np + (size_t)nq + 2 * (size_t)np) * sizeof *x);
+    if (!x) {
+#pragma omp atomic write
+      failed = 1;
+    }
+    double *n = x ? x + 3 * np : NULL, *uv = x ? x + 6 * np + nq : NULL;
+#pragma omp for schedule(static)
+    for (size_t e = 0; e < ne; ++e) {
+      if (!x || !o->el.dirty[e]) continue;
+      hoc_opt_gather(o, e, x, n);
+      double eta;
+      qe[e] = hoc_element_quality_test(o->t, o->measure, x, n, o->cfg.exact, &eta, NULL);
+      o->el.valid[e] = qe[e] > 0;
+      o->el.xvalid[e] = o->el.valid[e] &&
+                        (o->cfg.exact || !hoc_opt_guarded(o, e) || !hoc_element_folded(o->t, x, n));
+      o->el.pvalid[e] = (unsigned char)hoc_opt_param_valid(o, e, uv);
+      o->el.delta_own[e] = 0;
+      /* a fold the samples miss: a residual where the exact tests found it
+       * (the samples' residuals cannot see it, and no step would open it) */
+      o->el.has_fold[e] = o->cfg.exact && !o->el.valid[e] && !hoc_element_tangled(o->t, x, n, 0) &&
+                       hoc_element_fold_point(o->t, x, n, o->el.fold_rs + 2 * e);
+      if (!o->el.valid[e]) {
+        double smin, scale;
+        sigma_stats(o, x, n, &smin, &scale);
+        double eps = o->cfg.eps * scale;
+        o->el.delta_own[e] = smin < eps ? sqrt(eps * (eps - smin)) : 0;
+        if (!(o->el.delta_own[e] > 0)) o->el.delta_own[e] = eps;
+      }
+    }
+    free(x);
+  }
+  /* the tangled region: tangled elements and those sharing a node with one
+   * take the largest regularisation around them (Escobar et al. regularise
+   * the whole mesh with one delta; this keeps the rest of it exact) */
+  memcpy(o->el.was_region, o->el.region, ne);
+  memset(o->el.region, 0, ne);
+  for (size_t e = 0; e < ne; ++e) o->el.delta[e] = o->el.delta_own[e];
+  for (size_t e = 0; e < ne && !failed; ++e) {
+    if (o->el.valid[e]) continue;
+    for (int i = 0; i < np; ++i) {
+      size_t node = m->conn[e * (size_t)np + (size_t)i];
+      for (size_t a = o->adj.ne_start[node]; a < o->adj.ne_start[node + 1]; ++a) {
+        size_t e2 = o->adj.ne_elem[a];
+        o->el.region[e2] = 1;
+        if (o->el.delta[e2] < o->el.delta_own[e]) o->el.delta[e2] = o->el.delta_own[e];
+      }
+    }
+  }
+  /* objective parts that changed: moved, or in or out of the region */
+#pragma omp parallel
+  {
+    double *x =
+        malloc((6 * (size_t)np + (size_t)nq + (size_t)np + (size_t)o->t->nv + 1) * sizeof *x);
+    if (!x) {
+#pragma omp atomic write
+      failed = 1;
+    }
+    double *n = x ? x + 3 * np : NULL, *r = x ? x + 6 * np : NULL;
+#pragma omp for schedule(static)
+    for (size_t e = 0; e < ne; ++e) {
+      if (!x || !(o->el.dirty[e] || o->el.region[e] || o->el.was_region[e])) continue;
+      hoc_opt_gather(o, e, x, n);
+      double f = 0;
+      int nr = hoc_opt_elem_residuals(o, e, x, n, NULL, r, NULL, NULL);
+      for (int q = 0; q < nr; ++q) f += r[q] * r[q];
+      fe[e] = f;
+    }
+    free(x);
+  }
+  if (failed) return HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
+  memset(o->el.dirty, 0, ne);
+  double f = 0, qmin = INFINITY;
+  size_t nt = 0;
+  for (size_t e = 0; e < ne; ++e) {
+    f += fe[e];
+    qmin = fmin(qmin, qe[e]);
+    nt += qe[e] == 0.0;
+  }
+  *objective = f;
+  *min_q = ne ? qmin : 0;
+  *tangled = nt;
+  return HOC_OK;
+}
+
+/* Screening: every node's single-node Gauss-Newton decrease estimate
+ * 0.5 g^T H^-1 g from one evaluation per element (instead of one per block
+ * through each element); nodes whose estimate is below the gain threshold
+ * (and not near a tangle) start asleep. Element contributions are stored
+ * and summed per node in element order, so the result does not depend on
+ * the thread count. */
+hoc_status hoc_opt_screen(hoc_opt *o) {
+  hoc_mesh *m = o->m;
+  size_t ne = m->n_elems, np = (size_t)o->np;
+  /* [ne][np][g0 g1 h00 h01 h11], every entry written below (not zeroed) */
+  double *contrib = hoc_realloc(NULL, 5 * ne * np + 1, sizeof *contrib);
+  HOC_CHECK(contrib, HOC_ERR_MEMORY, "out of memory");
+  int nr_max = o->nq + o->np + o->t->nv + 1, failed = 0; /* + 1: a fold point */
+#pragma omp parallel
+  {
+    double *x = malloc((6 * np + (size_t)nr_max + 3 * (size_t)nr_max * np) * sizeof *x);
+    if (!x) {
+#pragma omp atomic write
+      failed = 1;
+    }
+    double *n = x ? x + 3 * np : NULL, *r = x ? x + 6 * np : NULL, *J = r ? r + nr_max : NULL;
+    unsigned char *need = x ? malloc(np) : NULL; /* the free nodes' columns of J */
+    if (x && !need) {
+#pragma omp atomic write
+      failed = 1;
+    }
+#pragma omp for schedule(static)
+    for (size_t e = 0; e < ne; ++e) {
+      if (!need || (o->adj.touched && !o->adj.touched[e])) continue; /* (no free node reads it) */
+      const size_t *cn = m->conn + e * np;
+      for (size_t i = 0; i < np; ++i) need[i] = o->adj.ndof[cn[i]] > 0;
+      hoc_opt_gather(o, e, x, n);
+      int nr = hoc_opt_elem_residuals(o, e, x, n, need, r, J, NULL);
+      for (size_t i = 0; i < np; ++i) {
+        const double *dz = o->node.dz + 6 * cn[i];
+        double c[5] = {0, 0, 0, 0, 0};
+        for (int q = 0; q < nr && need[i]; ++q) {
+          const double *j = J + 3 * ((size_t)q * np + i);
+          double z0 = j[0] * dz[0] + j[1] * dz[1] + j[2] * dz[2];
+          double z1 = j[0] * dz[3] + j[1] * dz[4] + j[2] * dz[5];
+          c[0] += 2 * r[q] * z0;
+          c[1] += 2 * r[q] * z1;
+          c[2] += 2 * z0 * z0;
+          c[3] += 2 * z0 * z1;
+          c[4] += 2 * z1 * z1;
+        }
+        /* written once, never read first: a fresh page read before it is
+         * written is copied from the zero page, and with two threads every
+         * such copy flushes the other core's TLB */
+        memcpy(contrib + 5 * (e * np + i), c, sizeof c);
+      }
+    }
+    free(need);
+    free(x);
+  }
+  if (failed) {
+    free(contrib);
+    return HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
+  }
+#pragma omp parallel for schedule(static)
+  for (size_t k = 0; k < m->n_nodes; ++k) {
+    if (!o->adj.ndof[k]) continue;
+    double c[5] = {0, 0, 0, 0, 0};
+    int near = 0;
+    for (size_t a = o->adj.ne_start[k]; a < o->adj.ne_start[k + 1]; ++a) {
+      size_t e = o->adj.ne_elem[a];
+      const double *ce = contrib + 5 * (e * np + (size_t)o->adj.ne_local[a]);
+      for (int d = 0; d < 5; ++d) c[d] += ce[d];
+      near |= o->el.region[e] || !o->el.valid[e];
+    }
+    double gain;
+    if (o->adj.ndof[k] == 2) {
+      double det = c[2] * c[4] - c[3] * c[3];
+      gain = det > 0
+                 ? 0.5 * (c[4] * c[0] * c[0] - 2 * c[3] * c[0] * c[1] + c[2] * c[1] * c[1]) / det
+                 : INFINITY;
+    } else {
+      gain = c[2] > 0 ? 0.5 * c[0] * c[0] / c[2] : INFINITY;
+    }
+    o->node.active[k] = near || !(gain < o->cfg.min_gain);
+  }
+  free(contrib);
+  return HOC_OK;
+}

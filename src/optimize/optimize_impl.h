@@ -1,0 +1,301 @@
+/* Internals of the optimiser (hoc_mesh_optimize, hoc_mesh_polish,
+ * hoc_mesh_check_gradient): simultaneous untangling and smoothing in
+ * parametric coordinates (the paper's Section 4).
+ *
+ * Objective: f(z) = sum_e sum_q r_eq^2, r_eq = sqrt(w_q) (eta(x~_q) - 1), the
+ * quadrature of sum_e int_{t_I} (eta - 1)^2 (weights normalised per element),
+ * with sigma replaced by sigma_delta = (sigma + sqrt(sigma^2 + 4 delta_e^2))/2
+ * on tangled elements and their neighbours (Escobar et al.), where the
+ * nodes also count as sample points (Definition 2 asks det > 0 there).
+ * Unknowns z: (u, v) of face-interior nodes, t of nodes on CAD curves.
+ * Positions x(z) = phi(u, v) or c(t) are always CAD evaluations.
+ *
+ * Solver: nonlinear block Gauss-Seidel. Each sweep visits the natural
+ * blocks of the high-order mesh: each vertex of the linear mesh (a
+ * face-interior vertex carries the high-order nodes of its star along,
+ * displaced in (u,v) by their barycentric weight, so the star moves as a
+ * whole), the nodes inside each element edge, and the nodes inside each
+ * element; then every free node on its own (the two families reach
+ * different places: blocks untangle high orders, single nodes let curve
+ * vertices slide where a block's compromise stalls). A block takes a damped
+ * Gauss-Newton step on the elements it touches (a small dense system),
+ * followed by a backtracking line search that rejects any step that tangles
+ * a valid element, folds an element in the parameter plane (so no node
+ * leaves its face's domain) or reorders nodes along a curve. Blocks are
+ * coloured so that blocks of a colour touch no common element: they are
+ * updated in parallel and the result does not depend on the thread count.
+ * A block whose step lowers f by less than a small share of f goes to
+ * sleep; the iteration ends when every block sleeps.
+ *
+ * Two phases: the tangle test first looks at samples (quadrature points,
+ * nodes, the order-2p lattice); once they say untangled, the exact fold
+ * tests of measuring (Bernstein coefficients, quality.h) may still find
+ * folds between them, and the sweeps go on with the exact test in every
+ * verdict, residuals at dense edge points, and in each element that only
+ * the exact tests find folded a residual at the point where they found
+ * sigma < 0 (phases.c).
+ *
+ * Files: setup.c (adjacency, unknowns, state), blocks.c (block families,
+ * carried nodes, colours, queues), objective.c (element residuals, the
+ * state at a sweep's start, screening), trial.c (trial parameters, CAD
+ * evaluation, commit), step.c (block model, damped solve, line search of a
+ * colour), phases.c (a run: its sweeps and phases), polish.c, driver.c
+ * (hoc_mesh_optimize, the protected run, snapshots), gradcheck.c;
+ * tunables.h holds every threshold.
+ * SPDX-License-Identifier: GPL-2.0-or-later
+ */
+#ifndef HOC_OPTIMIZE_IMPL_H
+#define HOC_OPTIMIZE_IMPL_H
+
+#include "mesh/mesh.h"
+#include "quality/quality.h"
+
+#include <stddef.h>
+
+/* A family of blocks: each block a set of free nodes updated together. */
+typedef struct hoc_opt_blockset {
+  size_t n_blocks;
+  size_t *bn_start, *bn_node; /* block -> its nodes */
+  size_t *be_start, *be_elem; /* block -> the elements it touches */
+  size_t *bd_start;           /* block -> first of its unknowns in step[] */
+  size_t *node_block;         /* [n_nodes] block of a free node (SIZE_MAX if fixed) */
+  int *node_off;              /* [n_nodes] offset of the node's unknowns in its block */
+  size_t *carry_start;        /* [n_blocks+1] nodes a vertex block carries ... */
+  size_t *carry_node;
+  double *carry_w; /* ... and their weights */
+  int max_nd;      /* most unknowns in a block */
+  int n_colors;
+  size_t *color_start; /* [n_colors+1] */
+  size_t *color_block;
+  /* Blocks woken since their colour last ran, per colour (most sleep: a
+   * colour then looks at these instead of all its blocks) */
+  int *block_color;        /* [n_blocks] */
+  size_t *queue_head;      /* [n_colors] first queued block, SIZE_MAX if none */
+  size_t *queue_next;      /* [n_blocks] next in its colour's queue */
+  unsigned char *queued;   /* [n_blocks] */
+  unsigned char *scan_all; /* [n_colors] every block may be active: look at all */
+} hoc_opt_blockset;
+
+/* Adjacency and unknowns: fixed once set up. */
+typedef struct hoc_opt_adjacency {
+  unsigned char *ndof; /* [n_nodes] unknowns of the node: 0, 1 (t) or 2 (u, v) */
+  size_t *ne_start;    /* [n_nodes+1] node -> elements */
+  size_t *ne_elem;     /* element */
+  int *ne_local;       /* local index of the node in it */
+  size_t *ns_start;    /* [n_nodes+1] node -> slots */
+  size_t *ns_slot;
+  size_t *nl_start; /* [n_nodes+1] node -> lines */
+  size_t *nl_line;
+  double *hsize;              /* [n_nodes] local length: bound on one step's displacement */
+  unsigned char *on_boundary; /* [n_elems] has a node on a CAD curve or vertex: kept unfolded in
+                                 (u,v) so no node leaves the trimmed face (inside, 3D validity
+                                 of the neighbours is the barrier) */
+  unsigned char *touched;     /* [n_elems] has a node that may move (NULL: no node is held by
+                                 hoc_optimize_options.free_elements) */
+} hoc_opt_adjacency;
+
+/* Per-element state, as of the last hoc_opt_sweep_start unless said
+ * otherwise. */
+typedef struct hoc_opt_elements {
+  double *fe, *qe;           /* [n_elems] objective part and q */
+  unsigned char *valid;      /* [n_elems] not tangled (Definition 2); kept up to date as
+                                blocks move */
+  unsigned char *pvalid;     /* [n_elems] not folded in the (u,v) plane (as valid) */
+  unsigned char *xvalid;     /* [n_elems] valid by the exact test too (as valid): a guarded
+                                element's step may not fold it between samples (one folded
+                                there already may stay so for a while) */
+  unsigned char *fragile;    /* [n_elems] guarded as in a protected run (see mark_fragile) */
+  unsigned char *region;     /* [n_elems] tangled or next to a tangled element: regularised,
+                                and free to pass through sigma = 0 while untangling stalls */
+  unsigned char *was_region; /* [n_elems] region of the previous sweep */
+  unsigned char *dirty;      /* [n_elems] a node moved since the last hoc_opt_sweep_start */
+  double *delta;             /* [n_elems] regularisation of the sweep */
+  double *delta_own;         /* [n_elems] regularisation from the element's own tangling */
+  unsigned char *has_fold;   /* [n_elems] tangled by the exact tests alone (exact phase): */
+  double *fold_rs;           /* [n_elems][2] a point where they find sigma < 0, a residual there */
+  unsigned char *near_e;     /* [n_elems] (scratch of hoc_opt_mark_near) */
+} hoc_opt_elements;
+
+/* Per-node (and per-slot) state. */
+typedef struct hoc_opt_nodes {
+  double *dz;            /* [n_nodes][6] dx/dz: (phi_u, phi_v) or (c', 0) */
+  double *normal;        /* [n_slots][3] unit CAD normal at each slot, oriented */
+  unsigned char *active; /* [n_nodes] awake: its blocks take steps */
+  unsigned char *near;   /* [n_nodes] within HOC_OPT_NEAR_RINGS elements of a tangled one */
+  unsigned char *moving; /* [n_nodes] use the trial state of this node */
+} hoc_opt_nodes;
+
+/* Settings of the run and its current phase. */
+typedef struct hoc_opt_settings {
+  int protect;        /* a protected run (see hoc_mesh_optimize): every element guarded */
+  int exact;          /* the tangle test with the exact fold tests, and dense edge
+                         residuals while untangling (the exact phase) */
+  int relax_uv;       /* second attempt: relaxed elements may fold in (u, v) too */
+  int local;          /* only blocks with a node near a tangled element move (the exact
+                         phase while some element is tangled) */
+  double eps;         /* regularisation scale of tangled elements (relative to their size) */
+  double min_gain;    /* per node: a step that lowers f by less puts the block to sleep */
+  double wake_factor; /* a move must gain this many times min_gain to wake its neighbours */
+} hoc_opt_settings;
+
+/* Trial state of the blocks of a colour and of their nodes. */
+typedef struct hoc_opt_trial {
+  double *step;         /* [unknowns] Gauss-Newton direction of each block */
+  double *alpha;        /* [n_blocks] step length */
+  double *f0, *fnew;    /* [n_blocks] local objective before / after */
+  double *slope;        /* [n_blocks] g . step (< 0) */
+  unsigned char *state; /* [n_blocks] 0 idle, 1 trying, 2 accepted */
+  size_t *list;         /* [n_blocks] scratch */
+  size_t *committed;    /* [n_blocks] blocks of the current colour that moved */
+  double *tpar;         /* [n_nodes][2] trial parameters */
+  double *txyz;         /* [n_nodes][3] */
+  double *tdz;          /* [n_nodes][6] */
+  double *tslot_uv;     /* [n_slots][2] */
+  double *tnormal;      /* [n_slots][3] */
+} hoc_opt_trial;
+
+/* The optimiser's state. */
+typedef struct hoc_opt {
+  hoc_mesh *m;
+  const hoc_model *model;
+  const hoc_quality_tables *t;
+  hoc_measure measure;
+  int np, nq;
+  hoc_opt_adjacency adj;
+  hoc_opt_blockset fam[2]; /* 0: vertices (with carried stars), edges, interiors; 1: single nodes */
+  hoc_opt_blockset *B;     /* the family being swept */
+  int max_nd;              /* most unknowns in a block of either family */
+  hoc_opt_elements el;
+  hoc_opt_nodes node;
+  hoc_opt_settings cfg;
+  hoc_opt_trial trial;
+} hoc_opt;
+
+typedef struct hoc_opt_scratch {
+  double *x, *n, *r, *J, *uv, *Jz, *H, *g, *L;
+  double *w;         /* [np] hoc_opt_block_model: a node's weight in the block, */
+  int *off;          /* its first unknown, */
+  unsigned char *nd; /* and its unknowns (0: not moved by the block) */
+} hoc_opt_scratch;
+
+/* A growable array of indices. */
+typedef struct hoc_growlist {
+  size_t *v;
+  size_t n, cap;
+} hoc_growlist;
+
+/* The mesh state the optimiser changes (node parameters and positions, slot
+ * and element parameters, line ends), kept while untangling so that a run
+ * that ends with more tangled elements than it once had returns the best
+ * state reached: a raised regularisation lets valid neighbours of a fold
+ * pass through sigma = 0, which does not always pay off. */
+typedef struct hoc_opt_snapshot {
+  double *param, *xyz, *slot_uv, *elem_uv, *line_t;
+  size_t tangled; /* SIZE_MAX: none taken */
+  double objective;
+} hoc_opt_snapshot;
+
+/* Element e may not fold between the samples (its steps run the exact
+ * tests): every element of a protected run, the fragile ones of any run. */
+static inline int hoc_opt_guarded(const hoc_opt *o, size_t e) {
+  return o->cfg.protect || o->el.fragile[e];
+}
+
+static inline void hoc_opt_cross(const double *a, const double *b, double *c) {
+  c[0] = a[1] * b[2] - a[2] * b[1];
+  c[1] = a[2] * b[0] - a[0] * b[2];
+  c[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+/* setup.c: adjacency, unknowns, state arrays ---------------------------- */
+
+/* Clears *o and sets it up for mesh m: adjacency, each node's unknowns (only
+ * the nodes of free_elements and free_rings rings around them if given),
+ * both block families, every state array. */
+hoc_status hoc_opt_setup(hoc_opt *o, hoc_mesh *m, hoc_measure measure, int fix_curves,
+                         const unsigned char *free_elements, int free_rings);
+void hoc_opt_free(hoc_opt *o);
+/* Derivatives dx/dz of every free node and the normals of every slot. */
+hoc_status hoc_opt_eval_all(hoc_opt *o);
+/* Compressed rows: start[n+1] and items[total] allocated; counts summed
+ * into starts; starts shifted back after filling. */
+hoc_status hoc_opt_csr_alloc(size_t n, size_t total, size_t **start, size_t **items);
+void hoc_opt_csr_finish_counts(size_t n, size_t *start);
+void hoc_opt_csr_restore(size_t n, size_t *start);
+/* elem[n_elems] grown by `rings` rings of elements; node[n_nodes]: their nodes. */
+void hoc_opt_grow_rings(const hoc_mesh *m, unsigned char *elem, unsigned char *node, int rings);
+hoc_status hoc_grow_push(hoc_growlist *g, size_t x);
+
+/* blocks.c: families, carried nodes, colours, sleeping and waking ------- */
+
+/* Family 0: vertices (carrying their stars), edges, interiors; 1: nodes. */
+hoc_status hoc_opt_build_blocks(hoc_opt *o, int family);
+/* Weight with which block b (of o->B) carries node (0: not carried). */
+double hoc_opt_carry_weight(const hoc_opt *o, size_t b, size_t node);
+/* Flags block b's nodes and carried nodes as moving (v = 1) or not. */
+void hoc_opt_set_moving(hoc_opt *o, size_t b, unsigned char v);
+/* Node k awake, its blocks of both families queued on their colours. */
+void hoc_opt_wake_node(hoc_opt *o, size_t k);
+/* Every block of both families may be active: each colour scans all. */
+void hoc_opt_wake_all(hoc_opt *o);
+/* o->node.near: within HOC_OPT_NEAR_RINGS rings of a tangled element. */
+void hoc_opt_mark_near(hoc_opt *o);
+/* The active blocks of a colour of o->B into o->trial.list; their number. */
+size_t hoc_opt_select_active(hoc_opt *o, int color);
+
+/* objective.c: element residuals, per-sweep state, screening ------------ */
+
+/* x[np][3], n[np][3] of element e (trial state of moving nodes). */
+void hoc_opt_gather(const hoc_opt *o, size_t e, double *x, double *n);
+/* Element e not folded in (u, v) (trial state of moving nodes); uv[np][2] scratch. */
+int hoc_opt_param_valid(const hoc_opt *o, size_t e, double *uv);
+/* Residuals r (and their Jacobian J if not NULL) of element e; their number. */
+int hoc_opt_elem_residuals(const hoc_opt *o, size_t e, const double *x, const double *n,
+                           const unsigned char *need, double *r, double *J, double *smin);
+/* Per-element state at a sweep's start; f, smallest q and tangled count. */
+hoc_status hoc_opt_sweep_start(hoc_opt *o, double *objective, double *min_q, size_t *tangled);
+/* Puts nodes with nothing to gain to sleep (before the first sweep). */
+hoc_status hoc_opt_screen(hoc_opt *o);
+
+/* trial.c: trial parameters, CAD evaluation, acceptance ----------------- */
+
+/* (u, v) of node k's copy kk in element e in the trial state. */
+void hoc_opt_trial_elem_uv(const hoc_opt *o, size_t k, size_t e, int kk, double *uv);
+/* Trial parameters of block b at its step length; 0 if one leaves a range. */
+int hoc_opt_set_trial_params(hoc_opt *o, size_t b);
+/* CAD evaluation of node i's trial; of list[0..n) on nthreads threads. */
+hoc_status hoc_opt_eval_trial(hoc_opt *o, size_t i);
+hoc_status hoc_opt_eval_trials(hoc_opt *o, const size_t *list, size_t n, int nthreads);
+/* Line l's nodes strictly in order along its curve (trial state of moving nodes). */
+int hoc_opt_line_monotone(const hoc_opt *o, size_t l);
+/* Accepts node k's trial. */
+void hoc_opt_commit(hoc_opt *o, size_t k);
+
+/* step.c: block model, damped Gauss-Newton, line search ----------------- */
+
+/* Local f, gradient g[nd] and Gauss-Newton matrix H[nd][nd] of block b. */
+void hoc_opt_block_model(const hoc_opt *o, size_t b, hoc_opt_scratch *s, double *f, double *g,
+                         double *H);
+/* One colour of o->B: a step per active block, a common line search. */
+hoc_status hoc_opt_do_color(hoc_opt *o, int color, hoc_opt_scratch *scr, int nthreads,
+                            size_t *moved);
+/* Scratch of nthreads threads (*out set even on failure: free it). */
+hoc_status hoc_opt_scratch_alloc(const hoc_opt *o, int nthreads, hoc_opt_scratch **out);
+void hoc_opt_scratch_free(hoc_opt_scratch *s, int nthreads);
+
+/* polish.c, phases.c, driver.c ------------------------------------------ */
+
+/* The polish of the elements the exact test finds tangled. */
+hoc_status hoc_opt_polish(hoc_opt *o);
+/* One run from the mesh as it is; protect: a protected run; sweeps
+ * numbered from it0 + 1, seconds from t0; *limited: its sampled phase used
+ * all its sweeps with elements still tangled. */
+hoc_status hoc_opt_run(hoc_mesh *mesh, const hoc_optimize_options *options, int protect, int it0,
+                       double t0, hoc_optimize_result *result, int *limited);
+/* Seconds on a monotonic clock. */
+double hoc_opt_now(void);
+hoc_status hoc_opt_snapshot_take(hoc_opt_snapshot *s, const hoc_mesh *m, size_t tangled, double f);
+void hoc_opt_snapshot_restore(const hoc_opt_snapshot *s, hoc_mesh *m);
+void hoc_opt_snapshot_free(hoc_opt_snapshot *s);
+
+#endif

@@ -1,0 +1,232 @@
+/* The trial state of moving nodes: trial parameters from a step, their
+ * CAD evaluation (positions, derivatives, slot parameters and normals),
+ * the order of nodes along a curve, and the acceptance of a trial.
+ * SPDX-License-Identifier: GPL-2.0-or-later
+ */
+#include "optimize/optimize_impl.h"
+#include "optimize/tunables.h"
+
+#include <float.h>
+#include <math.h>
+#include <omp.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* Unit normal of face f at uv from its derivatives, oriented like the mesh;
+ * where the parametrisation is singular, from just inside the face. */
+static hoc_status face_normal(const hoc_opt *o, int f, const double *uv, const double *du,
+                              const double *dv, double *n) {
+  double c[3], a[3], b[3];
+  hoc_opt_cross(du, dv, c);
+  double len = sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+  double scale = du[0] * du[0] + du[1] * du[1] + du[2] * du[2] + dv[0] * dv[0] +
+                 dv[1] * dv[1] + dv[2] * dv[2];
+  if (!(len > HOC_OPT_SINGULAR_NORMAL * scale)) {
+    const hoc_cad_face *face = &o->model->faces[f];
+    double p[2];
+    for (int d = 0; d < 2; ++d) {
+      double mid = 0.5 * (face->lo[d] + face->hi[d]);
+      p[d] =
+          uv[d] + HOC_OPT_NORMAL_OFFSET * (face->hi[d] - face->lo[d]) * (mid > uv[d] ? 1.0 : -1.0);
+    }
+    HOC_TRY(hoc_cad_face_eval(o->model, f, 1, p, NULL, a, b));
+    hoc_opt_cross(a, b, c);
+    len = sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+  }
+  double s = (o->m->face_orient[f] < 0 ? -1.0 : 1.0) / (len > 0 ? len : 1.0);
+  for (int k = 0; k < 3; ++k) n[k] = s * c[k];
+  return HOC_OK;
+}
+
+/* Parameters of node k's slot s for the trial: (u,v) of the slot, unwrapped
+ * near the element's current value. */
+void hoc_opt_trial_elem_uv(const hoc_opt *o, size_t k, size_t e, int kk, double *uv) {
+  const hoc_mesh *m = o->m;
+  const double *cur = m->elem_uv + 2 * (e * (size_t)o->np + (size_t)kk);
+  if (m->dim[k] == HOC_ON_FACE) {
+    /* the same displacement as the node's parameters */
+    uv[0] = cur[0] + (o->trial.tpar[2 * k] - m->param[2 * k]);
+    uv[1] = cur[1] + (o->trial.tpar[2 * k + 1] - m->param[2 * k + 1]);
+    return;
+  }
+  size_t s = m->elem_slot[e * (size_t)o->np + (size_t)kk];
+  uv[0] = o->trial.tslot_uv[2 * s];
+  uv[1] = o->trial.tslot_uv[2 * s + 1];
+  hoc_cad_face_unwrap_near(&o->model->faces[m->elem_face[e]], cur, uv);
+}
+
+/* A trial parameter is acceptable inside [lo, hi], or outside but closer to
+ * it than the current value (a node outside its face's range, e.g. read from
+ * a file, may come back). */
+static int param_ok(double cur, double v, double lo, double hi) {
+  if (v >= lo && v <= hi) return 1;
+  double dv = v < lo ? lo - v : v - hi, dc = cur < lo ? lo - cur : cur > hi ? cur - hi : 0;
+  return dv < dc;
+}
+
+/* Trial parameters of block b at step length alpha[b]: the block's nodes
+ * and the nodes it carries. Returns 0 if one leaves a non-closed range. */
+int hoc_opt_set_trial_params(hoc_opt *o, size_t b) {
+  const hoc_mesh *m = o->m;
+  const double *st = o->trial.step + o->B->bd_start[b];
+  double al = o->trial.alpha[b];
+  int inside = 1;
+  for (size_t a = o->B->bn_start[b]; a < o->B->bn_start[b + 1]; ++a) {
+    size_t k = o->B->bn_node[a];
+    int off = o->B->node_off[k];
+    if (m->dim[k] == HOC_ON_FACE) {
+      const hoc_cad_face *f = &o->model->faces[m->entity[k]];
+      for (int d = 0; d < 2; ++d) {
+        double v = m->param[2 * k + d] + al * st[off + d];
+        o->trial.tpar[2 * k + d] = v;
+        if (!(f->period[d] > 0) && !param_ok(m->param[2 * k + d], v, f->lo[d], f->hi[d]))
+          inside = 0;
+      }
+    } else {
+      const hoc_cad_curve *c = &o->model->curves[m->entity[k]];
+      double v = m->param[2 * k] + al * st[off];
+      o->trial.tpar[2 * k] = v;
+      o->trial.tpar[2 * k + 1] = 0;
+      if (!(c->period > 0) && !param_ok(m->param[2 * k], v, c->lo, c->hi)) inside = 0;
+    }
+  }
+  for (size_t j = o->B->carry_start[b]; j < o->B->carry_start[b + 1]; ++j) {
+    size_t c = o->B->carry_node[j];
+    const hoc_cad_face *f = &o->model->faces[m->entity[c]];
+    for (int d = 0; d < 2; ++d) {
+      double v = m->param[2 * c + d] + al * o->B->carry_w[j] * st[d];
+      o->trial.tpar[2 * c + d] = v;
+      if (!(f->period[d] > 0) && !param_ok(m->param[2 * c + d], v, f->lo[d], f->hi[d])) inside = 0;
+    }
+  }
+  return inside;
+}
+
+/* CAD evaluation of node i's trial parameters: position, derivatives, and
+ * the parameters and normals of its slots. */
+hoc_status hoc_opt_eval_trial(hoc_opt *o, size_t i) {
+  hoc_mesh *m = o->m;
+  const hoc_model *model = o->model;
+  int ent = m->entity[i];
+  if (m->dim[i] == HOC_ON_FACE) {
+    HOC_TRY(hoc_cad_face_eval(model, ent, 1, o->trial.tpar + 2 * i, o->trial.txyz + 3 * i,
+                              o->trial.tdz + 6 * i, o->trial.tdz + 6 * i + 3));
+    size_t s = o->adj.ns_slot[o->adj.ns_start[i]];
+    o->trial.tslot_uv[2 * s] = o->trial.tpar[2 * i];
+    o->trial.tslot_uv[2 * s + 1] = o->trial.tpar[2 * i + 1];
+    HOC_TRY(face_normal(o, ent, o->trial.tpar + 2 * i, o->trial.tdz + 6 * i,
+                        o->trial.tdz + 6 * i + 3, o->trial.tnormal + 3 * s));
+  } else {
+    HOC_TRY(hoc_cad_curve_eval(model, ent, 1, o->trial.tpar + 2 * i, o->trial.txyz + 3 * i,
+                               o->trial.tdz + 6 * i));
+    o->trial.tdz[6 * i + 3] = o->trial.tdz[6 * i + 4] = o->trial.tdz[6 * i + 5] = 0;
+    for (size_t j = o->adj.ns_start[i]; j < o->adj.ns_start[i + 1]; ++j) {
+      size_t s = o->adj.ns_slot[j];
+      int f = m->slot_face[s];
+      double uv[2], du[3], dv[3];
+      HOC_TRY(hoc_cad_curve_to_face(model, ent, f, 1, o->trial.tpar + 2 * i, uv));
+      hoc_cad_face_unwrap_near(&model->faces[f], m->slot_uv + 2 * s, uv);
+      HOC_TRY(hoc_cad_face_eval(model, f, 1, uv, NULL, du, dv));
+      o->trial.tslot_uv[2 * s] = uv[0];
+      o->trial.tslot_uv[2 * s + 1] = uv[1];
+      HOC_TRY(face_normal(o, f, uv, du, dv, o->trial.tnormal + 3 * s));
+      /* a small move cannot turn the surface over: where the CAD normal
+       * flips (a folded parametrisation at the boundary, see
+       * hoc_mesh_slot_normals) the slot keeps its orientation */
+      const double *old = o->node.normal + 3 * s;
+      double *nw = o->trial.tnormal + 3 * s;
+      if (nw[0] * old[0] + nw[1] * old[1] + nw[2] * old[2] < 0)
+        for (int d = 0; d < 3; ++d)
+          nw[d] = -nw[d];
+    }
+  }
+  return HOC_OK;
+}
+
+/* CAD evaluation of the trial parameters of the nodes in list[0..n) (no
+ * node twice), on nthreads threads. */
+hoc_status hoc_opt_eval_trials(hoc_opt *o, const size_t *list, size_t n, int nthreads) {
+  hoc_par_error err = {0};
+#pragma omp parallel for schedule(dynamic, 4)                                                      \
+    num_threads(nthreads) if (n > 8 && o->model->thread_safe)
+  for (size_t c = 0; c < n; ++c)
+    hoc_par_error_catch(&err, hoc_opt_eval_trial(o, list[c]));
+  return hoc_par_error_raise(&err);
+}
+
+/* Curve parameters of line l's nodes in order along the line (trial values
+ * for moving nodes), unwrapped from its first end: 1 if strictly monotone in
+ * the line's direction. */
+int hoc_opt_line_monotone(const hoc_opt *o, size_t l) {
+  const hoc_mesh *m = o->m;
+  int p = m->order;
+  const size_t *ln = m->line_conn + l * (size_t)(p + 1);
+  const hoc_cad_curve *c = &o->model->curves[m->line_curve[l]];
+  double ta = m->line_t[2 * l], tb = m->line_t[2 * l + 1], dir = tb > ta ? 1.0 : -1.0;
+  double prev = NAN;
+  for (int j = 0; j <= p; ++j) {
+    int idx = j == 0 ? 0 : j == p ? 1 : j + 1;
+    size_t i = ln[idx];
+    double t;
+    if (m->dim[i] != HOC_ON_CURVE) {
+      t = j == 0 ? ta : tb; /* a vertex end: the line's own parameter */
+    } else {
+      t = o->node.moving[i] ? o->trial.tpar[2 * i] : m->param[2 * i];
+      if (c->period > 0) {
+        double guess = ta + (tb - ta) * j / p;
+        t -= c->period * floor((t - guess) / c->period + 0.5);
+      }
+    }
+    if (j > 0 && !(dir * (t - prev) > 0)) return 0;
+    prev = t;
+  }
+  return 1;
+}
+
+/* Accept node k's trial. */
+void hoc_opt_commit(hoc_opt *o, size_t k) {
+  hoc_mesh *m = o->m;
+  int np = o->np;
+  for (size_t a = o->adj.ne_start[k]; a < o->adj.ne_start[k + 1]; ++a)
+    o->el.dirty[o->adj.ne_elem[a]] = 1;
+  for (size_t a = o->adj.ne_start[k]; a < o->adj.ne_start[k + 1]; ++a) {
+    size_t e = o->adj.ne_elem[a];
+    int kk = o->adj.ne_local[a];
+    double uv[2];
+    hoc_opt_trial_elem_uv(o, k, e, kk, uv);
+    memcpy(m->elem_uv + 2 * (e * (size_t)np + (size_t)kk), uv, sizeof uv);
+  }
+  if (m->dim[k] == HOC_ON_CURVE) {
+    const hoc_cad_curve *c = &o->model->curves[m->entity[k]];
+    for (size_t a = o->adj.nl_start[k]; a < o->adj.nl_start[k + 1]; ++a) {
+      size_t l = o->adj.nl_line[a];
+      const size_t *ln = m->line_conn + l * (size_t)(m->order + 1);
+      for (int end = 0; end < 2; ++end) {
+        if (ln[end] != k) continue;
+        double t = o->trial.tpar[2 * k], old = m->line_t[2 * l + end];
+        if (c->period > 0) t -= c->period * floor((t - old) / c->period + 0.5);
+        m->line_t[2 * l + end] = t;
+      }
+    }
+  }
+  for (size_t j = o->adj.ns_start[k]; j < o->adj.ns_start[k + 1]; ++j) {
+    size_t s = o->adj.ns_slot[j];
+    memcpy(m->slot_uv + 2 * s, o->trial.tslot_uv + 2 * s, 2 * sizeof(double));
+    memcpy(o->node.normal + 3 * s, o->trial.tnormal + 3 * s, 3 * sizeof(double));
+  }
+  double p[2] = {o->trial.tpar[2 * k], o->trial.tpar[2 * k + 1]};
+  if (m->dim[k] == HOC_ON_FACE) {
+    hoc_cad_face_wrap(&o->model->faces[m->entity[k]], p);
+    /* the slot keeps the wrapped value too (elements hold unwrapped copies) */
+    size_t s = o->adj.ns_slot[o->adj.ns_start[k]];
+    memcpy(m->slot_uv + 2 * s, p, sizeof p);
+  } else {
+    const hoc_cad_curve *c = &o->model->curves[m->entity[k]];
+    if (c->period > 0) p[0] -= c->period * floor((p[0] - c->lo) / c->period);
+  }
+  m->param[2 * k] = p[0];
+  m->param[2 * k + 1] = p[1];
+  memcpy(m->xyz + 3 * k, o->trial.txyz + 3 * k, 3 * sizeof(double));
+  memcpy(o->node.dz + 6 * k, o->trial.tdz + 6 * k, 6 * sizeof(double));
+}

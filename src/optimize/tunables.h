@@ -1,0 +1,173 @@
+/* The optimiser's tunables: every threshold, budget and step rule of
+ * hoc_mesh_optimize, hoc_mesh_polish and hoc_mesh_check_gradient in one
+ * table. Each entry says what it bounds and the class of meshes or
+ * problems it serves; a model named is an example of its class.
+ * SPDX-License-Identifier: GPL-2.0-or-later
+ */
+#ifndef HOC_OPTIMIZE_TUNABLES_H
+#define HOC_OPTIMIZE_TUNABLES_H
+
+/* Options --------------------------------------------------------------- */
+
+/* Sweeps of the first attempt when hoc_optimize_options.max_iterations is
+ * 0 or negative; and the largest number a caller may ask for (a guard
+ * against nonsense input, far above any useful run). */
+#define HOC_OPT_DEFAULT_MAX_ITERATIONS 100
+#define HOC_OPT_MAX_ITERATIONS_LIMIT 1000000
+
+/* hoc_optimize_options.tolerance when not positive: a block whose step
+ * lowers f by less than this share of the average free node's part of f
+ * goes to sleep. */
+#define HOC_OPT_DEFAULT_TOLERANCE 0.1
+
+/* Sweeps of each later stage (the second attempt, the exact phase, the
+ * smoothing after a polish) for max_iterations of the first: half as many,
+ * since each starts from a state the earlier sweeps already improved. */
+#define HOC_OPT_LATER_SWEEPS(max_iterations) (((max_iterations) + 1) / 2)
+
+/* Stopping rules -------------------------------------------------------- */
+
+/* Sweeps without a new fewest tangled count that end an attempt while the
+ * tangle test looks at samples. Untangling at high orders can sit on a
+ * plateau for 30 sweeps and more before the count falls again. */
+#define HOC_OPT_STALL_SWEEPS 40
+
+/* The same in the exact phase: its folds between the samples are few and
+ * local, and the sweeps open them within a few sweeps or not at all (the
+ * counts left after 15 sweeps are those left after 40, in half the time;
+ * `hocad` splits the elements that stay folded). */
+#define HOC_OPT_EXACT_STALL_SWEEPS 15
+
+/* Smoothing stagnates, and the run ends converged, when the last
+ * STAGNATION_SWEEPS sweeps, all without a tangled element, lowered the
+ * free part of f by less than STAGNATION_F of it and raised the smallest q
+ * by less than STAGNATION_Q: the rest of a smoothing run would change f
+ * and the worst element little for its cost. */
+#define HOC_OPT_STAGNATION_SWEEPS 10
+#define HOC_OPT_STAGNATION_F 0.05
+#define HOC_OPT_STAGNATION_Q 0.005
+
+/* Sleeping and waking --------------------------------------------------- */
+
+/* Nodes of elements with q below this share of the mean q never sleep:
+ * those elements set the mesh's worst quality, the number smoothing is
+ * judged by. */
+#define HOC_OPT_POOR_Q_SHARE 0.5
+
+/* A moved block wakes the nodes around it if its gain is at least this
+ * many times the sleeping threshold: every move while some element is
+ * tangled (untangling makes room by moving nodes further out), only
+ * significant ones while smoothing (small ones would spread waves of
+ * smaller ones through the whole mesh). */
+#define HOC_OPT_WAKE_UNTANGLING 1
+#define HOC_OPT_WAKE_SMOOTHING 10
+
+/* While the exact phase untangles, only blocks within this many rings of
+ * elements (sharing a node) of a tangled element move: its folds are few
+ * and local, and waking the whole mesh moves nodes far from any fold, each
+ * move testing its elements exactly. */
+#define HOC_OPT_NEAR_RINGS 3
+
+/* Regularisation of tangled elements ------------------------------------ */
+
+/* Regularisation scale delta of a tangled element relative to its size
+ * (Escobar et al.'s sigma_delta). When untangling stalls for EPS_STALL
+ * sweeps it is multiplied by EPS_RAISE while below EPS_RAISE_BELOW, then
+ * back to EPS: the cycle 1e-3 -> 1e-2 -> 1e-1 -> 1e-3. A large delta
+ * smooths the landscape, a small one pushes the last folds open (in the
+ * exact phase too: folds at the sharp corners of a cylinder's patch open
+ * only so). As soon as the count falls it is back to EPS. */
+#define HOC_OPT_EPS 1e-3
+#define HOC_OPT_EPS_RAISE 10
+#define HOC_OPT_EPS_RAISE_BELOW 0.05
+#define HOC_OPT_EPS_STALL 3
+
+/* Any raised regularisation is above this: the tangled region is then
+ * relaxed (its valid elements may pass through sigma = 0, see relaxed in
+ * step.c). */
+#define HOC_OPT_EPS_RAISED 2e-3
+
+/* Orders above this have no protected run (every trial of its sampled
+ * phase runs the exact tests, whose cost grows as p^4: at order 10 a sweep
+ * of the exact phase costs several times one of the sampled phase), relax
+ * tangled regions only in the exact phase (in the sampled phase their
+ * folds between the samples outnumber the folds they open), and guard
+ * fragile elements. */
+#define HOC_OPT_PROTECT_MAX_ORDER 5
+
+/* Above PROTECT_MAX_ORDER, in a whole-mesh run, a valid element with q
+ * below this is fragile: no step may fold it between the samples. Thin
+ * valid elements (aspect 20-50: a strip of needles across a narrow face,
+ * slivers where a wing meets a fuselage) fold between the samples of a
+ * high order at node moves of a small share of their width, and once
+ * folded are seldom opened again. They are few (under 1% of the elements
+ * on such meshes), so their exact tests cost little. */
+#define HOC_OPT_FRAGILE_Q 0.1
+
+/* Steps ------------------------------------------------------------------ */
+
+/* A block's step moves no node further than this share of its local length
+ * (the longest edge of the linear sub-triangles around it): a Gauss-Newton
+ * step from a regularised model can otherwise jump across neighbouring
+ * elements. Steps moving less than STEP_MIN of the local length are not
+ * taken. */
+#define HOC_OPT_STEP_CAP 0.25
+#define HOC_OPT_STEP_MIN 1e-12
+
+/* Backtracking line search of each colour: at most LINE_SEARCH_TRIES
+ * halvings of every block's step, accepting a step that lowers the local
+ * objective by ARMIJO times the predicted decrease; before each trial, up
+ * to RANGE_HALVINGS halvings to bring the parameters inside a bounded
+ * (non-periodic) range. */
+#define HOC_OPT_LINE_SEARCH_TRIES 12
+#define HOC_OPT_ARMIJO 1e-4
+#define HOC_OPT_BACKTRACK 0.5
+#define HOC_OPT_RANGE_HALVINGS 40
+
+/* Damping of the Gauss-Newton matrix H (Levenberg-Marquardt on its
+ * diagonal): mu from MU_FIRST, times MU_GROWTH until the Cholesky
+ * factorisation succeeds, giving up at MU_LAST; a zero diagonal entry counts
+ * as DIAG_FLOOR times the largest (nodes whose elements barely depend on
+ * them). */
+#define HOC_OPT_MU_FIRST 1e-10
+#define HOC_OPT_MU_GROWTH 100
+#define HOC_OPT_MU_LAST 1e6
+#define HOC_OPT_DIAG_FLOOR 1e-12
+
+/* Polish ----------------------------------------------------------------- */
+
+/* The polish is a search for the last few folds: with more tangled
+ * elements than POLISH_MAX_TANGLED it does not run (the sweeps failed too
+ * widely for a node-by-node search to pay), and each patch gets at most
+ * POLISH_MAX_MEASURES element measures. Its steps start at POLISH_SHARE of
+ * a node's local length and halve, when no move helps, down to
+ * POLISH_MIN_SHARE. A move that keeps the count must make the negative
+ * margins less negative by a relative POLISH_GAIN (rounding is no
+ * progress). */
+#define HOC_OPT_POLISH_MAX_TANGLED 32
+#define HOC_OPT_POLISH_MAX_MEASURES 30000
+#define HOC_OPT_POLISH_SHARE 0.25
+#define HOC_OPT_POLISH_MIN_SHARE (1.0 / 4096)
+#define HOC_OPT_POLISH_GAIN 1e-12
+
+/* Polish margin of an element folded between its samples only (no
+ * negative sigma at them): tangled, by a small amount. */
+#define HOC_OPT_POLISH_HIDDEN_FOLD (-1e-9)
+
+/* Numerical tolerances --------------------------------------------------- */
+
+/* A face's normal from its derivatives is singular where |phi_u x phi_v| <
+ * SINGULAR_NORMAL |D phi|^2 (a pole, a degenerate edge); it is then taken
+ * NORMAL_OFFSET of the face's parameter range inside the face. */
+#define HOC_OPT_SINGULAR_NORMAL 1e-10
+#define HOC_OPT_NORMAL_OFFSET 1e-5
+
+/* A vertex block carries a high-order node of its star whose barycentric
+ * weight for the vertex is above this (nodes on the opposite edge stay). */
+#define HOC_OPT_CARRY_MIN_WEIGHT 1e-12
+
+/* Gradient check: step of its fourth-order central differences as a
+ * share of the node's local length. */
+#define HOC_OPT_FD_STEP 1e-5
+
+#endif
