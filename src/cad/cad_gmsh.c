@@ -509,6 +509,7 @@ static int import_child(void *arg, int fd) {
   omp_set_num_threads(1); /* see child.c on OpenMP after fork */
   hoc_model *m = NULL;
   hoc_status st = open_here(job->path, &m);
+  hoc_model_destroy(&m); /* a leak checker looks at the child too */
   const char *msg = st == HOC_OK ? "" : hoc_last_error();
   uint32_t head[2] = {(uint32_t)st, (uint32_t)strlen(msg)};
   return hoc_child_write(fd, head, sizeof head) && hoc_child_write(fd, msg, head[1]) ? 0 : 1;

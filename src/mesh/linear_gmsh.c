@@ -174,6 +174,7 @@ static int face_probe(void *arg, int fd) {
   if (!keep) return 1;
   keep[job->face] = 1;
   mesh_only(model, keep);
+  free(keep);
   int ierr = 0;
   gmshModelMeshGenerate(2, &ierr);
   return send_u64(fd, 0) ? 0 : 1;
@@ -193,19 +194,24 @@ static int mesh_child(void *arg, int fd) {
     if (ierr) return send_u64(fd, 1) && send_gmsh_error(fd, "meshing the curves") ? 0 : 1;
     unsigned char *keep = hoc_calloc((size_t)model->n_faces, 1);
     if (!keep) return 1;
-    for (int f = 0; f < model->n_faces; ++f) {
+    int sent = 1;
+    for (int f = 0; f < model->n_faces && sent; ++f) {
       mesh_job probe = {model, 0, f};
       hoc_child c;
       hoc_child_end end;
       uint64_t ok = 1;
-      if (hoc_child_start(&c, face_probe, &probe) != HOC_OK) return 1;
+      if (hoc_child_start(&c, face_probe, &probe) != HOC_OK) {
+        sent = 0;
+        break;
+      }
       int got = hoc_child_read(&c, &ok, sizeof ok);
       hoc_child_finish(&c, 0, &end);
       keep[f] = got && ok == 0;
-      if (!send_u64(fd, keep[f] ? 0 : (uint64_t)(end.signal > 0 ? end.signal : 255)))
-        return 1;
+      sent = send_u64(fd, keep[f] ? 0 : (uint64_t)(end.signal > 0 ? end.signal : 255));
     }
-    mesh_only(model, keep);
+    if (sent) mesh_only(model, keep);
+    free(keep); /* a leak checker looks at the child too */
+    if (!sent) return 1;
   }
   gmshModelMeshGenerate(2, &ierr);
   if (ierr) return send_u64(fd, 1) && send_gmsh_error(fd, "meshing") ? 0 : 1;
