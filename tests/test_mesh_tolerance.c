@@ -122,7 +122,7 @@ static hoc_mesh *test_own_mesh(hoc_model *model) {
   printf("own mesh: %zu triangles, curve nodes up to z = %.4g, face gap %.4g\n", lin->n_elems,
          zmax, lin->face_gap);
   CHECK(zmax > 0.9 * BULGE && zmax <= BULGE * (1 + 1e-12));
-  CHECK(lin->face_gap > 0.9 * BULGE && lin->face_gap <= BULGE * (1 + 1e-9));
+  CHECK(hoc_mesh_face_gap(lin) > 0.9 * BULGE && hoc_mesh_face_gap(lin) <= BULGE * (1 + 1e-9));
   hoc_mesh *ho = NULL;
   CHECK_OK(hoc_mesh_elevate(lin, 2, HOC_NODES_EQUISPACED, &ho));
   if (ho) {

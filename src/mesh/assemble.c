@@ -25,6 +25,8 @@ hoc_status hoc_mesh_given_limit(hoc_model *model, double *limit) {
   return HOC_OK;
 }
 
+double hoc_mesh_face_gap(const hoc_mesh *mesh) { return mesh ? mesh->face_gap : 0.0; }
+
 /* Index of the first node of local edge k (0..2) in gmsh ordering. */
 static inline int edge_first_node(int p, int k) { return 3 + k * (p - 1); }
 
