@@ -103,7 +103,7 @@ void hoc_model_bbox(const hoc_model *model, double bbox[6]);
  *  curves and faces. STEP and IGES models agree only to such a tolerance.
  *  A mesh read from a file must lie on the model within 4 times it (at
  *  least 1e-6 of the bounding-box diagonal): see hoc_mesh_read_msh.
- *  Measured on the first call (about 0.1 s on large models), then kept;
+ *  Measured on the first call (at most 0.05 s on large models), then kept;
  *  not thread-safe on the first call.
  *  @param[out] tolerance  a length in the model's units */
 hoc_status hoc_model_tolerance(hoc_model *model, double *tolerance);

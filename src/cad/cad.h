@@ -126,7 +126,7 @@ hoc_status hoc_cad_vertex_to_face(const hoc_model *model, int vertex, int face, 
  *  edge and vertex; gmsh's API does not expose it). Samples bound the gap
  *  from below: on the 26 models of the corpus the largest gap of a dense
  *  measure (8193 points per curve) is at most 2.5 times this one
- *  (docs/kernel.md). Measured on the first call (about 0.1 s on the
+ *  (docs/kernel.md). Measured on the first call (at most 0.05 s on the
  *  largest models of the corpus), then kept: call it from one thread. */
 hoc_status hoc_cad_tolerance(hoc_model *model, double *tolerance);
 

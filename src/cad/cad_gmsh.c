@@ -499,7 +499,8 @@ static hoc_status open_here(const char *path, hoc_model **model);
  * reports its status and message; this process imports only after the
  * child succeeded, and reports the child's failure as its own otherwise
  * (its own gmsh stays untouched by a failed import). The cost is a second
- * import: 0.1 to 1.5 s on the largest models of the corpus (docs/kernel.md). */
+ * import, twice the time: 0.07 to 0.64 s more on the largest models of
+ * the corpus (docs/kernel.md). */
 typedef struct import_job {
   const char *path;
 } import_job;

@@ -191,7 +191,11 @@ static int mesh_child(void *arg, int fd) {
   gmshOptionSetNumber("General.Terminal", 1, &ierr);
   if (job->isolate) {
     gmshModelMeshGenerate(1, &ierr);
-    if (ierr) return send_u64(fd, 1) && send_gmsh_error(fd, "meshing the curves") ? 0 : 1;
+    if (ierr) { /* no face tried, then gmsh's error */
+      for (int f = 0; f < model->n_faces; ++f)
+        if (!send_u64(fd, 0)) return 1;
+      return send_u64(fd, 1) && send_gmsh_error(fd, "meshing the curves") ? 0 : 1;
+    }
     unsigned char *keep = hoc_calloc((size_t)model->n_faces, 1);
     if (!keep) return 1;
     int sent = 1;
