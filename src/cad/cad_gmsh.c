@@ -521,7 +521,7 @@ static hoc_status open_in_child(const char *path) {
   hoc_child c;
   HOC_TRY(hoc_child_start(&c, import_child, &job));
   uint32_t head[2] = {0, 0};
-  char msg[1024] = "";
+  char msg[1024] = ""; /* room for any message: they hold at most 511 bytes (core/error.c) */
   int got = hoc_child_read(&c, head, sizeof head) && head[1] < sizeof msg &&
             hoc_child_read(&c, msg, head[1]);
   hoc_child_end end;

@@ -464,8 +464,9 @@ static hoc_status slot_params(hoc_mesh *m, const hoc_mesh_source *src, double to
     /* a curve and the faces it bounds agree only to the model's tolerance
      * (up to 3e-3 of its size in the corpus, 2e-2 seen in an IGES model):
      * the node stays on its curve, the slot is the nearest point of the
-     * face, and the distance is recorded; a given mesh's node may not lie
-     * farther from the face than its curve does, by the given limit */
+     * face, and the distance is recorded; a given mesh's curve or vertex
+     * node may lie off the face by twice its given limit (that far off
+     * its curve, the curve as far off the face) */
     if (d > m->face_gap) m->face_gap = d;
     if (d > refuse) {
       status = HOC_ERROR(HOC_ERR_MISMATCH,
