@@ -84,8 +84,10 @@ typedef struct hoc_model hoc_model;
 /** Open a CAD model (STEP .step/.stp, IGES .igs/.iges, OpenCASCADE .brep).
  *  @param[in]  path   file name; the format is chosen by its extension
  *  @param[out] model  new model on success, NULL on failure
- *  Fails with HOC_ERR_IO if the file cannot be read, HOC_ERR_CAD if it holds
- *  no usable face. */
+ *  Fails with HOC_ERR_IO if the file cannot be read, HOC_ERR_FORMAT if the
+ *  kernel cannot read it (also when its importer crashes: the import runs
+ *  first in a child process, docs/kernel.md), HOC_ERR_CAD if it holds no
+ *  usable face. */
 hoc_status hoc_model_open(const char *path, hoc_model **model);
 
 /** Destroy a model (NULL allowed); clears *model. */
@@ -98,6 +100,17 @@ int hoc_model_num_vertices(const hoc_model *model);
 
 /** Axis-aligned bounding box [xmin, ymin, zmin, xmax, ymax, zmax]. */
 void hoc_model_bbox(const hoc_model *model, double bbox[6]);
+
+/** The model's own tolerance, measured: the largest distance between a
+ *  curve and a face it bounds (the curve against the kernel's curve on
+ *  that face, at 33 points of each curve) or between a vertex and its
+ *  curves and faces. STEP and IGES models agree only to such a tolerance.
+ *  A mesh read from a file must lie on the model within 4 times it (at
+ *  least 1e-6 of the bounding-box diagonal): see hoc_mesh_read_msh.
+ *  Measured on the first call (at most 0.05 s on large models), then kept;
+ *  not thread-safe on the first call.
+ *  @param[out] tolerance  a length in the model's units */
+hoc_status hoc_model_tolerance(hoc_model *model, double *tolerance);
 
 /* ------------------------------------------------------------------------ */
 /* Meshes                                                                   */
@@ -125,8 +138,12 @@ void hoc_linear_options_default(hoc_linear_options *options);
 void hoc_linear_sizes(const hoc_model *model, const hoc_linear_options *options, double *size_max,
                       double *size_min);
 
-/** Mesh every face of the model with linear triangles. Faces the kernel
- *  cannot mesh are skipped and counted in hoc_mesh_num_failed_faces().
+/** Mesh every face of the model with linear triangles. gmsh's mesher runs
+ *  in a child process (docs/kernel.md). Faces the kernel cannot mesh, or
+ *  on which its mesher crashes, are skipped and counted in
+ *  hoc_mesh_num_failed_faces(); HOC_ERR_MESH if it crashes on the curves
+ *  or on every face, HOC_ERR_INTERRUPTED if the child is interrupted
+ *  (SIGINT, SIGTERM).
  *  @param[in]  model    the CAD model; it must outlive the mesh
  *  @param[in]  options  NULL for defaults
  *  @param[out] mesh     new order-1 mesh */
@@ -169,7 +186,15 @@ hoc_status hoc_mesh_copy(const hoc_mesh *mesh, hoc_mesh **out);
  *  @param[in]  model  the model the mesh was made on
  *  @param[in]  path   .msh file
  *  @param[out] mesh   new mesh (equispaced node set)
- *  Fails with HOC_ERR_MISMATCH if the mesh does not lie on the model. */
+ *  Fails with HOC_ERR_MISMATCH if the mesh does not lie on the model: a
+ *  node on a CAD vertex or curve, or a triangle's corner, farther from its
+ *  entity than 4 times the model's tolerance (hoc_model_tolerance; at
+ *  least 1e-6 of the bounding-box diagonal), a vertex or curve node
+ *  farther than twice that from a face it bounds, or a high-order node
+ *  inside a face farther than 1% of the diagonal (such nodes are kept
+ *  where the file puts them: gmsh leaves them off the surface where its
+ *  projection fails). The message gives the distance, the limit and the
+ *  model's tolerance. */
 hoc_status hoc_mesh_read_msh(hoc_model *model, const char *path, hoc_mesh **mesh);
 
 /** Write a gmsh MSH 4.1 ASCII file: high-order triangles (gmsh node
@@ -202,6 +227,11 @@ int hoc_mesh_failed_face_tag(const hoc_mesh *mesh, int i);
  *  (gmsh leaves nodes off where its projection fails); hoc_mesh_optimize
  *  puts every node back on the CAD first. */
 hoc_status hoc_mesh_max_cad_distance(const hoc_mesh *mesh, double *distance);
+/** Largest distance between a node on a CAD curve or vertex and the point
+ *  of a face around it where the node sits on that face: the model's
+ *  curves lie off their faces within its tolerance (hoc_model_tolerance),
+ *  and the mesh records how far, without refusing it. 0 for NULL. */
+double hoc_mesh_face_gap(const hoc_mesh *mesh);
 
 /* ------------------------------------------------------------------------ */
 /* Quality                                                                  */

@@ -150,6 +150,92 @@ hoc_status hoc_cad_finish(hoc_model *m) {
   return HOC_OK;
 }
 
+/* Tolerance ---------------------------------------------------------------- */
+
+enum { GAP_SAMPLES = 33 };
+
+/* Largest distance between curve c and face f along the curve. Samples
+ * cluster at the curve's ends, where a curve and its face part most (the
+ * intersection curves of wing_fuselage.step peak within 0.4% of their
+ * ends), and avoid the evenly spaced knots where a fitted curve on the
+ * face meets the curve exactly. A kernel failure (no curve on that face)
+ * leaves the pair out. */
+static double curve_face_gap(const hoc_model *m, int c, int f) {
+  const hoc_cad_curve *cv = &m->curves[c];
+  double t[GAP_SAMPLES], x[3 * GAP_SAMPLES], uv[2 * GAP_SAMPLES], y[3 * GAP_SAMPLES];
+  for (int i = 0; i < GAP_SAMPLES; ++i) {
+    double s = 0.5 * (1 - cos(3.14159265358979323846 * i / (GAP_SAMPLES - 1)));
+    t[i] = cv->lo + s * (cv->hi - cv->lo);
+  }
+  double gap = 0;
+  if (hoc_cad_curve_eval(m, c, GAP_SAMPLES, t, x, NULL) != HOC_OK ||
+      hoc_cad_curve_to_face(m, c, f, GAP_SAMPLES, t, uv) != HOC_OK ||
+      hoc_cad_face_eval(m, f, GAP_SAMPLES, uv, y, NULL, NULL) != HOC_OK) {
+    hoc_error_clear();
+    return 0;
+  }
+  for (int i = 0; i < GAP_SAMPLES; ++i) {
+    double d = dist3(x + 3 * i, y + 3 * i);
+    if (d > gap) gap = d; /* NaN ignored */
+  }
+  return gap;
+}
+
+hoc_status hoc_cad_tolerance(hoc_model *m, double *tolerance) {
+  HOC_CHECK(m && tolerance, HOC_ERR_ARGUMENT, "NULL argument");
+  if (m->tolerance_known) {
+    *tolerance = m->tolerance;
+    return HOC_OK;
+  }
+  double tol = 0;
+  int at_curve = -1, at_face = -1;
+  for (int f = 0; f < m->n_faces; ++f) {
+    const hoc_cad_face *face = &m->faces[f];
+    for (int k = 0; k < face->n_curves; ++k) {
+      int c = hoc_cad_curve_index(m, abs(face->curves[k]));
+      if (c < 0) continue;
+      double g = curve_face_gap(m, c, f);
+      if (g > tol) tol = g, at_curve = m->curves[c].tag, at_face = face->tag;
+      /* the curve's vertices on this face */
+      const hoc_cad_curve *cv = &m->curves[c];
+      int ends[2] = {cv->v0, cv->v1};
+      for (int e = 0; e < 2; ++e) {
+        if (ends[e] < 0) continue;
+        double uv[2], y[3];
+        if (hoc_cad_vertex_to_face(m, ends[e], f, uv) != HOC_OK ||
+            hoc_cad_face_eval(m, f, 1, uv, y, NULL, NULL) != HOC_OK) {
+          hoc_error_clear();
+          continue;
+        }
+        double d = dist3(y, m->vertices[ends[e]].xyz);
+        if (d > tol) tol = d, at_curve = -1, at_face = face->tag;
+      }
+    }
+  }
+  for (int c = 0; c < m->n_curves; ++c) {
+    const hoc_cad_curve *cv = &m->curves[c];
+    double t[2] = {cv->lo, cv->hi}, x[6];
+    if (hoc_cad_curve_eval(m, c, 2, t, x, NULL) != HOC_OK) {
+      hoc_error_clear();
+      continue;
+    }
+    if (cv->v0 >= 0 && dist3(x, m->vertices[cv->v0].xyz) > tol)
+      tol = dist3(x, m->vertices[cv->v0].xyz), at_curve = cv->tag, at_face = -1;
+    if (cv->v1 >= 0 && dist3(x + 3, m->vertices[cv->v1].xyz) > tol)
+      tol = dist3(x + 3, m->vertices[cv->v1].xyz), at_curve = cv->tag, at_face = -1;
+  }
+  m->tolerance = tol;
+  m->tolerance_curve = at_curve;
+  m->tolerance_face = at_face;
+  m->tolerance_known = 1;
+  *tolerance = tol;
+  return HOC_OK;
+}
+
+hoc_status hoc_model_tolerance(hoc_model *model, double *tolerance) {
+  return hoc_cad_tolerance(model, tolerance);
+}
+
 int hoc_cad_face_index(const hoc_model *m, int tag) {
   return (tag >= 0 && tag <= m->max_face_tag && m->face_of_tag) ? m->face_of_tag[tag] : -1;
 }

@@ -9,6 +9,9 @@
 #include <omp.h>
 
 #include <math.h>
+#include <signal.h>
+#include <stdint.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -67,15 +70,234 @@ static void growable_free(growable *g) {
   free(g->tag);
 }
 
-/* Append the nodes classified on one entity (not its boundary). */
-static hoc_status add_entity_nodes(growable *g, hoc_hash *index, int dim, int tag, int entity) {
+/* gmsh's mesher runs in a child process (cad/child.c): it aborts the
+ * process on some models (an uncaught exception after "Unable to recover
+ * the edge"), which must end only the child. The child meshes, then sends
+ * the classified mesh through a pipe as gmsh's API returns it; this
+ * process reads it in the order it used to ask gmsh, so the mesh is the
+ * one an in-process run makes, bit for bit.
+ *
+ * When the child crashed, a second child finds the faces that crash gmsh
+ * and meshes the others: it meshes the curves, then tries each face alone
+ * in a child of its own (which inherits the curves' mesh, so a face costs
+ * only its own meshing), then meshes the faces that survived. The faces
+ * left out count as failed faces, like faces gmsh leaves empty.
+ *
+ * The stream (every count a uint64_t, arrays as gmsh returns them):
+ *   when finding crashing faces, for each face: 0 if meshing it alone
+ *     succeeded (or failed without a crash), else the signal that ended it
+ *     (255: it ended without a result otherwise);
+ *   status 0 (meshed), or 1 then a message (gmsh reported an error);
+ *   for each vertex, curve, face (model order), the nodes classified on it:
+ *     n, tags[n] (size_t), coordinates[3 n], m, parameters[m];
+ *   for each face its triangles, for each curve its lines:
+ *     n, node tags[n];
+ *   a failed gmsh call in the child sends UINT64_MAX and a message instead
+ *   of a count.
+ * A message is its length (uint64_t) and its bytes. */
+
+enum { MESSAGE_MAX = 512 };
+
+typedef struct mesh_job {
+  const hoc_model *model;
+  int isolate; /* find the faces that crash gmsh first, and leave them out */
+  int face;    /* a probe of one face (index): does meshing it alone crash? */
+} mesh_job;
+
+static int send_u64(int fd, uint64_t v) { return hoc_child_write(fd, &v, sizeof v); }
+
+static int send_message(int fd, const char *msg) {
+  size_t n = strlen(msg);
+  return send_u64(fd, n) && hoc_child_write(fd, msg, n);
+}
+
+/* gmsh's last error, prefixed by `what` */
+static int send_gmsh_error(int fd, const char *what) {
+  char *logged = NULL, msg[MESSAGE_MAX];
+  int ierr = 0;
+  gmshLoggerGetLastError(&logged, &ierr);
+  if (!ierr && logged && logged[0]) snprintf(msg, sizeof msg, "%s: %s", what, logged);
+  else snprintf(msg, sizeof msg, "%s failed in gmsh", what);
+  gmshFree(logged);
+  return send_message(fd, msg);
+}
+
+static int send_array(int fd, const void *data, size_t n, size_t size) {
+  return send_u64(fd, n) && hoc_child_write(fd, data, n * size);
+}
+
+static int send_entity_nodes(int fd, int dim, int tag) {
   size_t *tags = NULL, nt = 0, nc = 0, npar = 0;
   double *coord = NULL, *par = NULL;
-  int ierr = 0;
+  int ierr = 0, ok;
   gmshModelMeshGetNodes(&tags, &nt, &coord, &nc, &par, &npar, dim, tag, 0, dim > 0, &ierr);
+  if (ierr || nc != 3 * nt)
+    ok = send_u64(fd, UINT64_MAX) && send_gmsh_error(fd, "reading mesh nodes");
+  else
+    ok = send_u64(fd, nt) && hoc_child_write(fd, tags, nt * sizeof *tags) &&
+         hoc_child_write(fd, coord, nc * sizeof *coord) && send_array(fd, par, npar, sizeof *par);
+  gmshFree(tags);
+  gmshFree(coord);
+  gmshFree(par);
+  return ok;
+}
+
+static int send_entity_elements(int fd, int type, int tag) {
+  size_t *etags = NULL, net = 0, *ntags = NULL, nnt = 0;
+  int ierr = 0, ok;
+  gmshModelMeshGetElementsByType(type, &etags, &net, &ntags, &nnt, tag, 0, 1, &ierr);
+  int nodes_per = type == 2 ? 3 : 2;
+  if (ierr || nnt != net * (size_t)nodes_per)
+    ok = send_u64(fd, UINT64_MAX) && send_gmsh_error(fd, "reading mesh elements");
+  else
+    ok = send_array(fd, ntags, nnt, sizeof *ntags);
+  gmshFree(etags);
+  gmshFree(ntags);
+  return ok;
+}
+
+/* The next generate meshes only the faces with keep[f] set. */
+static void mesh_only(const hoc_model *model, const unsigned char *keep) {
+  int ierr = 0;
+  gmshOptionSetNumber("Mesh.MeshOnlyVisible", 1, &ierr);
+  for (int f = 0; f < model->n_faces; ++f) {
+    int dimtag[2] = {2, model->faces[f].tag};
+    gmshModelSetVisibility(dimtag, 2, keep[f], 0, &ierr);
+  }
+}
+
+/* In a grandchild: mesh face job->face alone (the curves are meshed). */
+static int face_probe(void *arg, int fd) {
+  const mesh_job *job = arg;
+  const hoc_model *model = job->model;
+  unsigned char *keep = hoc_calloc((size_t)model->n_faces, 1);
+  if (!keep) return 1;
+  keep[job->face] = 1;
+  mesh_only(model, keep);
+  free(keep);
+  int ierr = 0;
+  gmshModelMeshGenerate(2, &ierr);
+  return send_u64(fd, 0) ? 0 : 1;
+}
+
+/* In the child: mesh and send the result. */
+static int mesh_child(void *arg, int fd) {
+  const mesh_job *job = arg;
+  const hoc_model *model = job->model;
+  int ierr = 0;
+  omp_set_num_threads(1); /* one thread: the same mesh every time (and see child.c) */
+  /* gmsh's errors (its verbosity is errors only) go to the child's
+   * output, so that the cause of a crash is there after it */
+  gmshOptionSetNumber("General.Terminal", 1, &ierr);
+  if (job->isolate) {
+    gmshModelMeshGenerate(1, &ierr);
+    if (ierr) { /* no face tried, then gmsh's error */
+      for (int f = 0; f < model->n_faces; ++f)
+        if (!send_u64(fd, 0)) return 1;
+      return send_u64(fd, 1) && send_gmsh_error(fd, "meshing the curves") ? 0 : 1;
+    }
+    unsigned char *keep = hoc_calloc((size_t)model->n_faces, 1);
+    if (!keep) return 1;
+    int sent = 1;
+    for (int f = 0; f < model->n_faces && sent; ++f) {
+      mesh_job probe = {model, 0, f};
+      hoc_child c;
+      hoc_child_end end;
+      uint64_t ok = 1;
+      if (hoc_child_start(&c, face_probe, &probe) != HOC_OK) {
+        sent = 0;
+        break;
+      }
+      int got = hoc_child_read(&c, &ok, sizeof ok);
+      hoc_child_finish(&c, 0, &end);
+      keep[f] = got && ok == 0;
+      sent = send_u64(fd, keep[f] ? 0 : (uint64_t)(end.signal > 0 ? end.signal : 255));
+    }
+    if (sent) mesh_only(model, keep);
+    free(keep); /* a leak checker looks at the child too */
+    if (!sent) return 1;
+  }
+  gmshModelMeshGenerate(2, &ierr);
+  if (ierr) return send_u64(fd, 1) && send_gmsh_error(fd, "meshing") ? 0 : 1;
+  if (!send_u64(fd, 0)) return 1;
+  for (int v = 0; v < model->n_vertices; ++v)
+    if (!send_entity_nodes(fd, 0, model->vertices[v].tag)) return 1;
+  for (int c = 0; c < model->n_curves; ++c)
+    if (!send_entity_nodes(fd, 1, model->curves[c].tag)) return 1;
+  for (int f = 0; f < model->n_faces; ++f)
+    if (!send_entity_nodes(fd, 2, model->faces[f].tag)) return 1;
+  for (int f = 0; f < model->n_faces; ++f)
+    if (!send_entity_elements(fd, 2, model->faces[f].tag)) return 1;
+  for (int c = 0; c < model->n_curves; ++c)
+    if (!send_entity_elements(fd, 1, model->curves[c].tag)) return 1;
+  return 0;
+}
+
+/* In this process: reading the child's stream. `ended` is set when the
+ * stream stops short (the child died: its exit status tells why). */
+typedef struct reader {
+  hoc_child *child;
+  int ended;
+} reader;
+
+static hoc_status read_u64(reader *r, uint64_t *v) {
+  if (hoc_child_read(r->child, v, sizeof *v)) return HOC_OK;
+  r->ended = 1;
+  return HOC_ERR_MESH;
+}
+
+static hoc_status read_bytes(reader *r, void *dst, size_t n) {
+  if (hoc_child_read(r->child, dst, n)) return HOC_OK;
+  r->ended = 1;
+  return HOC_ERR_MESH;
+}
+
+/* A message from the child into this thread's error, as HOC_ERR_CAD. */
+static hoc_status read_message(reader *r) {
+  uint64_t n;
+  char msg[MESSAGE_MAX];
+  HOC_TRY(read_u64(r, &n));
+  if (n >= sizeof msg) {
+    r->ended = 1;
+    return HOC_ERR_MESH;
+  }
+  HOC_TRY(read_bytes(r, msg, (size_t)n));
+  msg[n] = '\0';
+  return HOC_ERROR(HOC_ERR_CAD, "%s", msg);
+}
+
+/* A count, or the child's message if it sent one instead. */
+static hoc_status read_count(reader *r, size_t limit, size_t *n) {
+  uint64_t v;
+  HOC_TRY(read_u64(r, &v));
+  if (v == UINT64_MAX) return read_message(r);
+  HOC_CHECK(v <= limit, HOC_ERR_INTERNAL, "gmsh's mesher sent a count of %llu",
+            (unsigned long long)v);
+  *n = (size_t)v;
+  return HOC_OK;
+}
+
+/* Read an array of n items of `size` bytes into a new allocation. */
+static hoc_status read_alloc(reader *r, size_t n, size_t size, void **out) {
+  *out = hoc_calloc(n, size);
+  HOC_CHECK(*out, HOC_ERR_MEMORY, "out of memory for %zu mesh items", n);
+  return read_bytes(r, *out, n * size);
+}
+
+/* Append the nodes classified on one entity (not its boundary). */
+static hoc_status add_entity_nodes(reader *r, growable *g, hoc_hash *index, int dim, int entity) {
+  size_t *tags = NULL, nt = 0, npar = 0;
+  double *coord = NULL, *par = NULL;
   hoc_status status = HOC_OK;
-  if (ierr || nc != 3 * nt || (dim > 0 && npar != (size_t)dim * nt)) {
-    status = hoc_gmsh_error("reading mesh nodes");
+  const size_t limit = SIZE_MAX / 64;
+  HOC_TRY_GOTO(read_count(r, limit, &nt), done);
+  HOC_TRY_GOTO(read_alloc(r, nt, sizeof *tags, (void **)&tags), done);
+  HOC_TRY_GOTO(read_alloc(r, 3 * nt, sizeof *coord, (void **)&coord), done);
+  HOC_TRY_GOTO(read_count(r, limit, &npar), done);
+  HOC_TRY_GOTO(read_alloc(r, npar, sizeof *par, (void **)&par), done);
+  if (dim > 0 && npar != (size_t)dim * nt) {
+    status = HOC_ERROR(HOC_ERR_CAD, "reading mesh nodes: gmsh gave %zu parameters for %zu nodes",
+                       npar, nt);
     goto done;
   }
   HOC_TRY_GOTO(reserve(g, nt), done);
@@ -93,24 +315,26 @@ static hoc_status add_entity_nodes(growable *g, hoc_hash *index, int dim, int ta
     g->n++;
   }
 done:
-  gmshFree(tags);
-  gmshFree(coord);
-  gmshFree(par);
+  free(tags);
+  free(coord);
+  free(par);
   return status;
 }
 
-/* Append the elements of one type on one entity as node indices. */
-static hoc_status add_entity_elements(int type, int nodes_per, int tag, const hoc_hash *index,
+/* Append the elements of one entity as node indices. */
+static hoc_status add_entity_elements(reader *r, int nodes_per, const hoc_hash *index,
                                       size_t **conn, size_t *n, size_t *cap, int **owner,
                                       int owner_value) {
-  size_t *etags = NULL, net = 0, *ntags = NULL, nnt = 0;
-  int ierr = 0;
-  gmshModelMeshGetElementsByType(type, &etags, &net, &ntags, &nnt, tag, 0, 1, &ierr);
+  size_t *ntags = NULL, nnt = 0;
   hoc_status status = HOC_OK;
-  if (ierr || nnt != net * (size_t)nodes_per) {
-    status = hoc_gmsh_error("reading mesh elements");
+  HOC_TRY_GOTO(read_count(r, SIZE_MAX / 64, &nnt), done);
+  HOC_TRY_GOTO(read_alloc(r, nnt, sizeof *ntags, (void **)&ntags), done);
+  if (nnt % (size_t)nodes_per) {
+    status = HOC_ERROR(HOC_ERR_INTERNAL, "gmsh's mesher sent %zu node tags for elements of %d",
+                       nnt, nodes_per);
     goto done;
   }
+  size_t net = nnt / (size_t)nodes_per;
   if (*n + net > *cap) {
     size_t c = *cap ? *cap : 1024;
     while (c < *n + net) c *= 2;
@@ -138,9 +362,105 @@ static hoc_status add_entity_elements(int type, int nodes_per, int tag, const ho
   }
   *n += net;
 done:
-  gmshFree(etags);
-  gmshFree(ntags);
+  free(ntags);
   return status;
+}
+
+/* The classified linear mesh as the child sent it. */
+typedef struct linear_parts {
+  growable g;
+  hoc_hash index;
+  size_t *tri, n_tri, cap_tri, *lines, n_lines, cap_lines;
+  int *tri_face, *line_curve, *failed, n_failed;
+} linear_parts;
+
+static void linear_parts_free(linear_parts *p) {
+  growable_free(&p->g);
+  hoc_hash_free(&p->index);
+  free(p->tri);
+  free(p->tri_face);
+  free(p->lines);
+  free(p->line_curve);
+  free(p->failed);
+  memset(p, 0, sizeof *p);
+}
+
+static hoc_status read_parts(reader *r, const hoc_model *model, linear_parts *p) {
+  HOC_TRY(hoc_hash_init(&p->index, 4096));
+  for (int v = 0; v < model->n_vertices; ++v)
+    HOC_TRY(add_entity_nodes(r, &p->g, &p->index, 0, v));
+  for (int c = 0; c < model->n_curves; ++c)
+    HOC_TRY(add_entity_nodes(r, &p->g, &p->index, 1, c));
+  for (int f = 0; f < model->n_faces; ++f)
+    HOC_TRY(add_entity_nodes(r, &p->g, &p->index, 2, f));
+  p->failed = hoc_calloc((size_t)model->n_faces, sizeof *p->failed);
+  HOC_CHECK(p->failed, HOC_ERR_MEMORY, "out of memory");
+  for (int f = 0; f < model->n_faces; ++f) {
+    size_t before = p->n_tri;
+    HOC_TRY(add_entity_elements(r, 3, &p->index, &p->tri, &p->n_tri, &p->cap_tri, &p->tri_face,
+                                f));
+    if (p->n_tri == before) p->failed[p->n_failed++] = f;
+  }
+  for (int c = 0; c < model->n_curves; ++c)
+    HOC_TRY(add_entity_elements(r, 2, &p->index, &p->lines, &p->n_lines, &p->cap_lines,
+                                &p->line_curve, c));
+  return HOC_OK;
+}
+
+/* How a run of the mesher ended. */
+typedef enum run_outcome {
+  RUN_MESHED,     /* the mesh was read */
+  RUN_GMSH_ERROR, /* gmsh reported an error: this thread's error holds it */
+  RUN_CRASHED,    /* the child died of a signal (end->signal) */
+  RUN_FAILED      /* anything else: this thread's error holds it */
+} run_outcome;
+
+/* One run of gmsh's mesher in a child. With `crashed` ([n_faces]), the
+ * child first finds the faces that crash gmsh: crashed[f] receives the
+ * signal that ended face f's probe (0: none), *probed how many faces it
+ * reported before it ended. */
+static run_outcome run_mesher(const hoc_model *model, unsigned char *crashed, int *probed,
+                              linear_parts *parts, hoc_status *error, hoc_child_end *end) {
+  mesh_job job = {model, crashed != NULL, -1};
+  hoc_child child;
+  *error = hoc_child_start(&child, mesh_child, &job);
+  if (*error != HOC_OK) return RUN_FAILED;
+  reader r = {&child, 0};
+  hoc_status st = HOC_OK;
+  for (int f = 0; crashed && f < model->n_faces && st == HOC_OK; ++f) {
+    uint64_t sig = 0;
+    st = read_u64(&r, &sig);
+    if (st == HOC_OK) {
+      crashed[f] = (unsigned char)(sig < 256 ? sig : 255);
+      *probed = f + 1;
+    }
+  }
+  uint64_t head = 0;
+  if (st == HOC_OK) st = read_u64(&r, &head);
+  int gmsh_error = st == HOC_OK && head == 1;
+  if (st == HOC_OK && head > 1) st = HOC_ERROR(HOC_ERR_INTERNAL, "gmsh's mesher sent no status");
+  if (gmsh_error) st = read_message(&r);
+  else if (st == HOC_OK) st = read_parts(&r, model, parts);
+  hoc_child_finish(&child, st != HOC_OK && !r.ended && !gmsh_error, end);
+  if (r.ended) {
+    if (end->signal) return RUN_CRASHED;
+    *error = HOC_ERROR(HOC_ERR_MESH,
+                       "gmsh's mesher ended without a result (exit status %d)%s%s",
+                       end->exit_code, end->first_error[0] ? ": " : "", end->first_error);
+    return RUN_FAILED;
+  }
+  *error = st;
+  if (gmsh_error) return RUN_GMSH_ERROR;
+  return st == HOC_OK ? RUN_MESHED : RUN_FAILED;
+}
+
+/* Error of a run that a signal ended, with what it was doing. */
+static hoc_status crash_error(int sig, const char *first_error, const char *doing) {
+  if (hoc_signal_is_interrupt(sig))
+    return HOC_ERROR(HOC_ERR_INTERRUPTED, "interrupted (%s) while meshing", hoc_signal_name(sig));
+  return HOC_ERROR(HOC_ERR_MESH, "gmsh's mesher %s (%s) %s%s%s",
+                   sig == SIGKILL ? "was killed" : "crashed", hoc_signal_name(sig), doing,
+                   first_error[0] ? ": " : "", first_error);
 }
 
 /* One linear mesh with gmsh's current size settings (model and mesh
@@ -174,85 +494,87 @@ static hoc_status generate_once(hoc_model *model, const hoc_linear_options *opti
   gmshOptionSetNumber("Mesh.ElementOrder", 1, &ierr);
   if (o.progress && o.progress(o.progress_user, "linear mesh", 0.0))
     return HOC_ERROR(HOC_ERR_INTERRUPTED, "interrupted");
-  hoc_quiet q;
-  hoc_quiet_begin(&q);
-  /* gmsh meshes faces in parallel when OpenMP allows, and then not always
-   * the same mesh: one thread, so a model always gets the same mesh */
-  int threads = omp_get_max_threads();
-  omp_set_num_threads(1);
-  gmshModelMeshGenerate(2, &ierr);
-  omp_set_num_threads(threads);
-  char kernel_msg[256];
-  hoc_quiet_end(&q, kernel_msg, sizeof kernel_msg);
-  if (ierr) {
-    int ierr2 = 0;
-    gmshModelMeshClear(NULL, 0, &ierr2);
-    return HOC_ERROR(HOC_ERR_MESH, "gmsh could not mesh the surfaces%s%s",
-                     kernel_msg[0] ? ": " : "", kernel_msg);
-  }
-  if (o.progress && o.progress(o.progress_user, "linear mesh", 0.9))
-    return HOC_ERROR(HOC_ERR_INTERRUPTED, "interrupted");
 
-  growable g = {0};
-  hoc_hash index = {0};
-  size_t *tri = NULL, n_tri = 0, cap_tri = 0, *lines = NULL, n_lines = 0, cap_lines = 0;
-  int *tri_face = NULL, *line_curve = NULL, *failed = NULL, n_failed = 0;
-  hoc_status status = HOC_OK;
-  HOC_TRY_GOTO(hoc_hash_init(&index, 4096), done);
-  for (int v = 0; v < model->n_vertices; ++v)
-    HOC_TRY_GOTO(add_entity_nodes(&g, &index, 0, model->vertices[v].tag, v), done);
-  for (int c = 0; c < model->n_curves; ++c)
-    HOC_TRY_GOTO(add_entity_nodes(&g, &index, 1, model->curves[c].tag, c), done);
-  for (int f = 0; f < model->n_faces; ++f)
-    HOC_TRY_GOTO(add_entity_nodes(&g, &index, 2, model->faces[f].tag, f), done);
-  failed = hoc_calloc((size_t)model->n_faces, sizeof *failed);
-  if (!failed) {
-    status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
+  linear_parts p = {0};
+  hoc_status status = HOC_OK, err;
+  hoc_child_end end;
+  unsigned char *crashed = NULL;
+  run_outcome run = run_mesher(model, NULL, NULL, &p, &err, &end);
+  if (run == RUN_CRASHED && !hoc_signal_is_interrupt(end.signal) && model->n_faces > 1) {
+    /* mesh the faces that do not crash gmsh; the others count as failed */
+    hoc_child_end first = end;
+    int probed = 0, n_crashed = 0;
+    linear_parts_free(&p);
+    crashed = hoc_calloc((size_t)model->n_faces, 1);
+    if (!crashed) {
+      status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
+      goto done;
+    }
+    run = run_mesher(model, crashed, &probed, &p, &err, &end);
+    for (int f = 0; f < probed; ++f) {
+      if (crashed[f] && hoc_signal_is_interrupt(crashed[f])) {
+        status = crash_error(crashed[f], "", "");
+        goto done;
+      }
+      n_crashed += crashed[f] != 0;
+    }
+    if (run == RUN_CRASHED && probed == 0) {
+      status = crash_error(end.signal, end.first_error, "meshing the curves");
+      goto done;
+    }
+    if (probed == model->n_faces && n_crashed == model->n_faces) {
+      status = crash_error(first.signal, first.first_error, "on every face");
+      goto done;
+    }
+    if (run == RUN_CRASHED) {
+      status = crash_error(end.signal, end.first_error,
+                           probed < model->n_faces ? "while trying the faces one by one"
+                                                   : "without the faces that crash it alone");
+      goto done;
+    }
+  }
+  switch (run) {
+  case RUN_MESHED: break;
+  case RUN_GMSH_ERROR:
+    status = HOC_ERROR(HOC_ERR_MESH, "gmsh could not mesh the surfaces: %s",
+                       end.first_error[0] ? end.first_error : hoc_last_error());
+    goto done;
+  case RUN_CRASHED:
+    status = crash_error(end.signal, end.first_error, "meshing the surfaces");
+    goto done;
+  case RUN_FAILED: status = err; goto done;
+  }
+  if (o.progress && o.progress(o.progress_user, "linear mesh", 0.9)) {
+    status = HOC_ERROR(HOC_ERR_INTERRUPTED, "interrupted");
     goto done;
   }
-  for (int f = 0; f < model->n_faces; ++f) {
-    size_t before = n_tri;
-    HOC_TRY_GOTO(add_entity_elements(2, 3, model->faces[f].tag, &index, &tri, &n_tri, &cap_tri,
-                                     &tri_face, f),
-                 done);
-    if (n_tri == before) failed[n_failed++] = f;
-  }
-  for (int c = 0; c < model->n_curves; ++c)
-    HOC_TRY_GOTO(add_entity_elements(1, 2, model->curves[c].tag, &index, &lines, &n_lines,
-                                     &cap_lines, &line_curve, c),
-                 done);
-  if (!n_tri) {
+  if (!p.n_tri) {
     status = HOC_ERROR(HOC_ERR_MESH, "gmsh produced no triangle on any of the %d faces%s%s",
-                       model->n_faces, kernel_msg[0] ? ": " : "", kernel_msg);
+                       model->n_faces, end.first_error[0] ? ": " : "", end.first_error);
     goto done;
   }
   hoc_mesh_source src = {0};
   src.order = 1;
   src.nodeset = HOC_NODES_EQUISPACED;
-  src.n_nodes = g.n;
-  src.xyz = g.xyz;
-  src.param = g.par;
-  src.dim = g.dim;
-  src.entity = g.ent;
-  src.n_elems = n_tri;
-  src.conn = tri;
-  src.elem_face = tri_face;
-  src.n_lines = n_lines;
-  src.line_conn = lines;
-  src.line_curve = line_curve;
-  src.node_tag = g.tag;
+  src.n_nodes = p.g.n;
+  src.xyz = p.g.xyz;
+  src.param = p.g.par;
+  src.dim = p.g.dim;
+  src.entity = p.g.ent;
+  src.n_elems = p.n_tri;
+  src.conn = p.tri;
+  src.elem_face = p.tri_face;
+  src.n_lines = p.n_lines;
+  src.line_conn = p.lines;
+  src.line_curve = p.line_curve;
+  src.node_tag = p.g.tag;
   HOC_TRY_GOTO(hoc_mesh_assemble(model, &src, 1e-6, mesh), done);
-  (*mesh)->n_failed_faces = n_failed;
-  (*mesh)->failed_faces = failed;
-  failed = NULL;
+  (*mesh)->n_failed_faces = p.n_failed;
+  (*mesh)->failed_faces = p.failed;
+  p.failed = NULL;
 done:
-  growable_free(&g);
-  hoc_hash_free(&index);
-  free(tri);
-  free(tri_face);
-  free(lines);
-  free(line_curve);
-  free(failed);
+  linear_parts_free(&p);
+  free(crashed);
   return status;
 }
 

@@ -50,6 +50,9 @@ struct hoc_mesh {
   int *failed_faces;        /* [n_failed_faces] face indices the mesher could not mesh */
   double off_cad;           /* largest distance of a given node position from its entity
                                (nonzero only for meshes kept as read) */
+  double face_gap;          /* largest distance between a curve or vertex node and its
+                               slot's point on a face around it: the model's curves lie
+                               off their faces within its tolerance (hoc_cad_tolerance) */
 };
 
 /** Input of hoc_mesh_assemble: a triangulation with classified nodes, as
@@ -74,15 +77,35 @@ typedef struct hoc_mesh_source {
                                 otherwise positions are recomputed from the parameters */
   const signed char *face_orient; /* [n_faces] known orientation (a mesh raised from one
                                      that has it), or NULL: found from the elements */
+  int given;                 /* the mesh comes from outside (a file): checked against the
+                                model (hoc_mesh_given_limit); otherwise it is hocad's own,
+                                whose nodes are never refused */
 } hoc_mesh_source;
+
+/** How far a node of a given mesh may lie from its CAD vertex or curve, or
+ *  an element's corner from its face: 4 times the model's tolerance
+ *  (hoc_cad_tolerance, which samples bound from below: at most 2.5 times
+ *  short of a dense measure on the corpus), and at least 1e-6 of the
+ *  diagonal (positions a file's writer rounded to 7 digits). A curve or
+ *  vertex node may lie twice that from a face it bounds (that far from its
+ *  curve, the curve as far from the face). */
+hoc_status hoc_mesh_given_limit(hoc_model *model, double *limit);
 
 /** Build a mesh from a triangulation: locate nodes without parameters on
  *  their entities, reparametrise curve and vertex nodes on the faces around
  *  them (slots), unwrap each element's parameters across seams, give pole
  *  nodes a usable parameter per element, orient the faces from the
  *  elements, and recompute every node position from its parameters.
- *  Fails with HOC_ERR_MISMATCH when a node is farther than `tolerance`
- *  (relative to the model's diagonal) from its entity. */
+ *  `tolerance` (relative to the model's diagonal): nodes without
+ *  parameters are located within it; a curve or vertex node whose
+ *  parameters on a face (its curve on that face) put it farther than this
+ *  from its position moves to the nearest point of the face, and the
+ *  distance left is recorded (face_gap). A given mesh (src->given) fails
+ *  with HOC_ERR_MISMATCH when a node lies farther from the model than
+ *  hoc_mesh_given_limit allows, or a high-order node inside a face farther
+ *  than the larger of `tolerance` and that limit (such nodes are kept
+ *  where the file puts them: gmsh leaves them off the surface where its
+ *  projection fails). hocad's own meshes are never refused. */
 hoc_status hoc_mesh_assemble(hoc_model *model, const hoc_mesh_source *src, double tolerance,
                              hoc_mesh **mesh);
 
