@@ -186,7 +186,7 @@ typedef struct hoc_msh_options {
                        1: also each node's parametric coordinates on its entity (t on a
                        curve, (u, v) on a face), as gmsh's Mesh.SaveParametric writes
                        them (4.1: parametric node blocks; 2.2: $ParametricNodes). Many
-                       readers refuse such files (meshio 5.0: "parametric nodes not
+                       readers refuse such files (meshio: "parametric nodes not
                        implemented"); hoc_mesh_read_msh reads both */
 } hoc_msh_options;
 
