@@ -241,8 +241,9 @@ static void test_options(void) {
 
 int main(void) {
   test_options();
-  const int screw[] = {2, 3, 5, 10}, periodic[] = {2, 5};
+  const int screw[] = {2, 3, 5, 10}, periodic[] = {2, 5}, bottle[] = {2};
   test_model("screw.step", screw, 4);
   test_model("periodic_u_cst.step", periodic, 2); /* a periodic face and its seam */
+  test_model("occt_bottle.brep", bottle, 1);
   return test_report();
 }
