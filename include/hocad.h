@@ -163,8 +163,9 @@ hoc_status hoc_mesh_copy(const hoc_mesh *mesh, hoc_mesh **out);
  *  hoc_mesh_write_msh. Triangles of any order up to 10 are read; other
  *  elements are ignored. Nodes keep the positions the file gives. Nodes
  *  with parametric coordinates in the file keep them; the others are
- *  located on their CAD entity (Newton from a located neighbour in the same
- *  element, so a file without parameters costs little more to read). The
+ *  located on their CAD entity, by Newton's method from a located
+ *  neighbour in the same element (a projection only where no neighbour
+ *  leads to the node), a few microseconds per node. The
  *  entity of a node is the file's (4.1 node blocks, 2.2 $ParametricNodes),
  *  else, in a 2.2 file, that of the lowest-dimensional element using it
  *  (point, then line, then triangle; ties to the lowest tag).
