@@ -7,8 +7,8 @@
  * CAD point), the same q; and writing what was read gives the same file
  * byte for byte. The default is MSH 4.1 ASCII without parameters. Models:
  * the screw (orders 2 to 10), periodic_u_cst (a periodic face with a pole)
- * and the bottle (curves whose parametrisation starts with a zero
- * derivative).
+ * and the bottle (a curve whose parametrisation slows down and doubles
+ * back near its start, where Newton from the vertex finds a local minimum).
  * SPDX-License-Identifier: GPL-2.0-or-later */
 #include "io/io.h"
 #include "mesh/mesh.h"
