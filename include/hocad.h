@@ -179,10 +179,17 @@ hoc_status hoc_mesh_convert(const hoc_mesh *mesh, hoc_nodeset nodeset, hoc_mesh 
  *  @param[out] out  the copy (destroy it with hoc_mesh_destroy) */
 hoc_status hoc_mesh_copy(const hoc_mesh *mesh, hoc_mesh **out);
 
-/** Read a gmsh MSH 4.1 mesh (ASCII or binary) of the model's surfaces,
- *  e.g. one written by gmsh or by hoc_mesh_write_msh. Triangles of any order
- *  up to 10 are read; other elements are ignored. Nodes without parametric
- *  coordinates in the file are located on their CAD entity.
+/** Read a gmsh MSH mesh of the model's surfaces: MSH 4.1 (ASCII or
+ *  binary) or MSH 2.2 (ASCII or binary), e.g. one written by gmsh or by
+ *  hoc_mesh_write_msh. Triangles of any order up to 10 are read; other
+ *  elements are ignored. Nodes keep the positions the file gives. Nodes
+ *  with parametric coordinates in the file keep them; the others are
+ *  located on their CAD entity, by Newton's method from a located
+ *  neighbour in the same element (a projection only where no neighbour
+ *  leads to the node), a few microseconds per node. The
+ *  entity of a node is the file's (4.1 node blocks, 2.2 $ParametricNodes),
+ *  else, in a 2.2 file, that of the lowest-dimensional element using it
+ *  (point, then line, then triangle; ties to the lowest tag).
  *  @param[in]  model  the model the mesh was made on
  *  @param[in]  path   .msh file
  *  @param[out] mesh   new mesh (equispaced node set)
@@ -197,11 +204,42 @@ hoc_status hoc_mesh_copy(const hoc_mesh *mesh, hoc_mesh **out);
  *  model's tolerance. */
 hoc_status hoc_mesh_read_msh(hoc_model *model, const char *path, hoc_mesh **mesh);
 
-/** Write a gmsh MSH 4.1 ASCII file: high-order triangles (gmsh node
- *  ordering, equispaced nodes) with every node on its CAD entity and its
- *  parametric coordinates. The file is written to a temporary name and
- *  renamed on success. Orders above 10 have no MSH element type
- *  (HOC_ERR_UNSUPPORTED). */
+/** How a .msh file is written. */
+typedef struct hoc_msh_options {
+  int version;    /**< 41: MSH 4.1 (default), with $Entities; 22: MSH 2.2, the version
+                       solvers that predate 4.1 read, whose elements carry physical tag 0
+                       (no physical groups, as in 4.1) and elementary tag the CAD entity,
+                       with a point element on each node at a CAD vertex so that every
+                       node's entity follows from the elements */
+  int binary;     /**< 0: ASCII (default); 1: binary, in the host's byte order */
+  int parametric; /**< 0 (default): node positions only, which every reader opens;
+                       1: also each node's parametric coordinates on its entity (t on a
+                       curve, (u, v) on a face), as gmsh's Mesh.SaveParametric writes
+                       them (4.1: parametric node blocks; 2.2: $ParametricNodes). Many
+                       readers refuse such files (meshio: "parametric nodes not
+                       implemented"); hoc_mesh_read_msh reads both */
+} hoc_msh_options;
+
+/** Fill options with the defaults: MSH 4.1, ASCII, no parametric coordinates. */
+void hoc_msh_options_default(hoc_msh_options *options);
+
+/** Write a gmsh .msh file of the mesh: high-order triangles (gmsh node
+ *  ordering, equispaced nodes) on the CAD faces and lines of the same order
+ *  on the CAD curves, every node classified on its CAD entity. Node tags
+ *  are 1..n, grouped by entity; element tags 1..n. Coordinates are written
+ *  so that they read back bit for bit (ASCII: 17 significant digits). The
+ *  file is written to a temporary name and renamed on success.
+ *  @param[in] mesh     the mesh (any node set: converted to equispaced)
+ *  @param[in] path     output file
+ *  @param[in] options  NULL for the defaults (hoc_msh_options_default)
+ *  Fails with HOC_ERR_ARGUMENT for an option out of range, HOC_ERR_UNSUPPORTED
+ *  for an order above 10 (MSH has no such triangle: write a .vtu) or a 2.2
+ *  file of 2^31 nodes or elements or more (2.2 tags are int). */
+hoc_status hoc_mesh_write_msh_with(const hoc_mesh *mesh, const char *path,
+                                   const hoc_msh_options *options);
+
+/** hoc_mesh_write_msh_with with the default options (MSH 4.1 ASCII, no
+ *  parametric coordinates). */
 hoc_status hoc_mesh_write_msh(const hoc_mesh *mesh, const char *path);
 
 /** Write a VTK XML unstructured grid (.vtu) of Lagrange triangles with cell

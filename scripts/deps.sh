@@ -6,7 +6,9 @@ set -euo pipefail
 
 packages=(build-essential cmake libgmsh-dev libpng-dev zlib1g-dev)
 if [ "${1:-}" = "--test" ]; then
-  packages+=(valgrind clang libclang-rt-14-dev pngcheck)
+  # the readers test (tests/test_io_readers.py) runs /usr/bin/python3 with these
+  packages+=(valgrind clang libclang-rt-14-dev pngcheck python3-meshio python3-gmsh python3-vtk9
+             python3-numpy python3-pytest)
 fi
 
 missing=()

@@ -1,8 +1,10 @@
 /* MSH files: exact number conversion, round trips of synthetic meshes of
- * orders 1, 2, 3, 5, 10 (positions bit-exact, classification, parameters,
- * connectivity), gmsh reads our files, we read gmsh's ASCII, binary and 2.2
- * files, hand-made binary files of both byte orders, and corrupt input of
- * every kind fails cleanly (HOC_ERR_FORMAT, or HOC_ERR_UNSUPPORTED for what
+ * orders 1, 2, 3, 5, 10 in every format the writer knows (4.1 and 2.2,
+ * ASCII and binary, with and without parameters: positions bit-exact,
+ * classification, parameters, connectivity), gmsh reads each of them alike,
+ * we read gmsh's 4.1 and 2.2 files (ASCII and binary), hand-made binary
+ * 4.1 and 2.2 files of both byte orders, and corrupt input of every kind
+ * fails cleanly (HOC_ERR_FORMAT, or HOC_ERR_UNSUPPORTED for what
  * is valid but not handled).
  * SPDX-License-Identifier: GPL-2.0-or-later */
 #include "io/io.h"
@@ -25,6 +27,9 @@ static uint64_t rng(void) { /* xorshift64 */
   rng_state ^= rng_state << 17;
   return rng_state;
 }
+
+/* MSH 4.1 ASCII with parametric coordinates */
+static const hoc_msh_options param41 = {41, 0, 1};
 
 static int same_bits(double a, double b) { return !memcmp(&a, &b, sizeof a); }
 
@@ -379,75 +384,64 @@ static int same_mesh(const synth *m, const hoc_msh_raw *raw, int with_params, si
   return ok;
 }
 
-static void test_round_trip(int p) {
-  static synth m;
-  build_synth(&m, p);
-  char path[64];
-  snprintf(path, sizeof path, "synth_p%d.msh", p);
-  hoc_msh_write_data d;
-  fill_write_data(&m, &d);
-  CHECK_OK(hoc_msh_write(path, &d));
-  hoc_msh_raw raw;
-  CHECK_OK(hoc_msh_read(path, &raw));
-  static size_t map[MAXN];
-  CHECK(same_mesh(&m, &raw, 1, map));
-  /* tags 1..n in file order, blocks sorted by (dim, entity tag) */
-  int tags_ok = 1, sorted = 1;
-  for (size_t j = 0; j < raw.n_nodes; ++j) {
-    tags_ok &= raw.node_tag[j] == j + 1;
-    if (j) {
-      int d0 = raw.node_dim[j - 1], d1 = raw.node_dim[j];
-      sorted &= d0 < d1 || (d0 == d1 && raw.node_entity_tag[j - 1] <= raw.node_entity_tag[j]);
-    }
-  }
-  CHECK(tags_ok);
-  CHECK(sorted);
+/* The file formats the writer knows, with a name suffix each. */
+static const struct {
+  hoc_msh_options o;
+  const char *suffix;
+} formats[] = {{{41, 0, 1}, "41_param"},    {{41, 0, 0}, "41"},       {{41, 1, 1}, "41bin_param"},
+               {{41, 1, 0}, "41bin"},        {{22, 0, 0}, "22"},       {{22, 0, 1}, "22_param"},
+               {{22, 1, 0}, "22bin"},        {{22, 1, 1}, "22bin_param"}};
 
-  /* gmsh reads it: same nodes (bit-exact), parameters, elements */
-  int ierr = 0;
+/* gmsh reads our file: same nodes (bit-exact), classification, parameters
+ * (parametric files), elements. */
+static void check_gmsh_reads(const synth *m, const hoc_msh_raw *raw, const char *path,
+                             int parametric) {
+  int p = m->p, ierr = 0;
   gmshClear(&ierr);
   gmshOpen(path, &ierr);
   CHECK(ierr == 0);
   size_t *tags = NULL, ntags = 0, ncoord = 0, npar = 0;
   double *coord = NULL, *par = NULL;
   gmshModelMeshGetNodes(&tags, &ntags, &coord, &ncoord, &par, &npar, -1, -1, 0, 0, &ierr);
-  int nodes_ok = ierr == 0 && ntags == raw.n_nodes;
+  int nodes_ok = ierr == 0 && ntags == raw->n_nodes;
   for (size_t k = 0; k < ntags && nodes_ok; ++k) {
     size_t j = tags[k] - 1;
-    nodes_ok &= j < raw.n_nodes;
+    nodes_ok &= j < raw->n_nodes;
     for (int c = 0; c < 3 && nodes_ok; ++c)
-      nodes_ok &= same_bits(coord[3 * k + (size_t)c], raw.xyz[3 * j + (size_t)c]);
+      nodes_ok &= same_bits(coord[3 * k + (size_t)c], raw->xyz[3 * j + (size_t)c]);
   }
   CHECK(nodes_ok);
   gmshFree(tags), gmshFree(coord), gmshFree(par);
   int params_ok = 1;
-  for (int dim = 1; dim <= 2; ++dim)
-    for (int k = 0; k < (dim == 1 ? 7 : 2); ++k) {
-      int etag = dim == 1 ? curve_tags[k] : surface_tags[k];
-      gmshModelMeshGetNodes(&tags, &ntags, &coord, &ncoord, &par, &npar, dim, etag, 0, 1, &ierr);
-      params_ok &= ierr == 0 && npar == (size_t)dim * ntags;
+  for (int dim = 0; dim <= 2; ++dim)
+    for (int k = 0; k < (dim == 0 ? 6 : dim == 1 ? 7 : 2); ++k) {
+      int etag = dim == 0 ? point_tags[k] : dim == 1 ? curve_tags[k] : surface_tags[k];
+      gmshModelMeshGetNodes(&tags, &ntags, &coord, &ncoord, &par, &npar, dim, etag, 0, parametric,
+                            &ierr);
+      params_ok &= ierr == 0 && npar == (parametric ? (size_t)dim * ntags : 0);
       size_t expect = 0;
-      for (size_t i = 0; i < raw.n_nodes; ++i)
-        expect += raw.node_dim[i] == dim && raw.node_entity_tag[i] == etag;
+      for (size_t i = 0; i < raw->n_nodes; ++i)
+        expect += raw->node_dim[i] == dim && raw->node_entity_tag[i] == etag;
       params_ok &= ntags == expect;
       for (size_t q = 0; q < ntags && params_ok; ++q) {
         size_t j = tags[q] - 1;
-        params_ok &= j < raw.n_nodes && raw.node_dim[j] == dim && raw.node_entity_tag[j] == etag;
-        for (int c = 0; c < dim && params_ok; ++c)
-          params_ok &= same_bits(par[(size_t)dim * q + (size_t)c], raw.param[2 * j + (size_t)c]);
+        params_ok &= j < raw->n_nodes && raw->node_dim[j] == dim && raw->node_entity_tag[j] == etag;
+        for (int c = 0; c < dim && params_ok && parametric; ++c)
+          params_ok &= same_bits(par[(size_t)dim * q + (size_t)c], raw->param[2 * j + (size_t)c]);
       }
       gmshFree(tags), gmshFree(coord), gmshFree(par);
     }
+  if (!params_ok) fprintf(stderr, "gmsh classifies the nodes of %s otherwise\n", path);
   CHECK(params_ok);
   int np = (p + 1) * (p + 2) / 2;
   size_t *et = NULL, net = 0, *en = NULL, nen = 0;
   gmshModelMeshGetElementsByType(hoc_msh_triangle_type(p), &et, &net, &en, &nen, -1, 0, 1, &ierr);
-  int elems_ok = ierr == 0 && net == m.nt && nen == m.nt * (size_t)np;
+  int elems_ok = ierr == 0 && net == m->nt && nen == m->nt * (size_t)np;
   for (size_t k = 0; k < nen && elems_ok; ++k)
-    elems_ok &= en[k] == raw.node_tag[raw.tri_nodes[k]];
+    elems_ok &= en[k] == raw->node_tag[raw->tri_nodes[k]];
   gmshFree(et), gmshFree(en);
   gmshModelMeshGetElementsByType(hoc_msh_line_type(p), &et, &net, &en, &nen, -1, 0, 1, &ierr);
-  elems_ok &= ierr == 0 && net == m.nl && nen == m.nl * (size_t)(p + 1);
+  elems_ok &= ierr == 0 && net == m->nl && nen == m->nl * (size_t)(p + 1);
   gmshFree(et), gmshFree(en);
   CHECK(elems_ok);
   int *dimtags = NULL;
@@ -455,8 +449,49 @@ static void test_round_trip(int p) {
   gmshModelGetEntities(&dimtags, &ndt, -1, &ierr);
   CHECK(ierr == 0 && ndt == 2 * (6 + 7 + 2));
   gmshFree(dimtags);
-  hoc_msh_raw_free(&raw);
-  CHECK(raw.xyz == NULL && raw.n_nodes == 0 && raw.tri_nodes == NULL);
+}
+
+static void test_round_trip(int p) {
+  static synth m;
+  build_synth(&m, p);
+  hoc_msh_write_data d;
+  fill_write_data(&m, &d);
+  for (size_t f = 0; f < sizeof formats / sizeof *formats; ++f) {
+    const hoc_msh_options *o = &formats[f].o;
+    char path[64];
+    snprintf(path, sizeof path, "synth_p%d_%s.msh", p, formats[f].suffix);
+    CHECK_OK(hoc_msh_write(path, &d, o));
+    hoc_msh_raw raw;
+    CHECK_OK(hoc_msh_read(path, &raw));
+    static size_t map[MAXN];
+    int same = same_mesh(&m, &raw, o->parametric, map);
+    if (!same) fprintf(stderr, "%s does not read back as written\n", path);
+    CHECK(same);
+    /* tags 1..n in file order, blocks sorted by (dim, entity tag) */
+    int tags_ok = 1, sorted = 1;
+    for (size_t j = 0; j < raw.n_nodes; ++j) {
+      tags_ok &= raw.node_tag[j] == j + 1;
+      if (j) {
+        int d0 = raw.node_dim[j - 1], d1 = raw.node_dim[j];
+        sorted &= d0 < d1 || (d0 == d1 && raw.node_entity_tag[j - 1] <= raw.node_entity_tag[j]);
+      }
+    }
+    CHECK(tags_ok);
+    CHECK(sorted);
+    check_gmsh_reads(&m, &raw, path, o->parametric);
+    hoc_msh_raw_free(&raw);
+    CHECK(raw.xyz == NULL && raw.n_nodes == 0 && raw.tri_nodes == NULL);
+  }
+  /* the default is MSH 4.1 ASCII without parameters */
+  char path[64], ref[64];
+  snprintf(path, sizeof path, "synth_p%d_default.msh", p);
+  snprintf(ref, sizeof ref, "synth_p%d_41.msh", p);
+  CHECK_OK(hoc_msh_write(path, &d, NULL));
+  size_t n1, n2;
+  char *a = fixture_slurp(path, &n1), *b = fixture_slurp(ref, &n2);
+  CHECK(a && b && n1 == n2 && !memcmp(a, b, n1));
+  free(a);
+  free(b);
 }
 
 /* Numbers at the edges of the double range survive bit for bit. */
@@ -475,7 +510,7 @@ static void test_special_values(void) {
   d.n_nodes = 3, d.xyz = xyz, d.param = par, d.node_dim = dim, d.node_entity_tag = ent;
   d.order = 1, d.n_tris = 1, d.tri_nodes = tri, d.tri_surface_tag = &tri_tag;
   d.n_lines = 1, d.line_nodes = line, d.line_curve_tag = &line_tag;
-  CHECK_OK(hoc_msh_write("special.msh", &d));
+  CHECK_OK(hoc_msh_write("special.msh", &d, &param41));
   hoc_msh_raw raw;
   CHECK_OK(hoc_msh_read("special.msh", &raw));
   int ok = raw.n_nodes == 3;
@@ -498,38 +533,51 @@ static void test_write_arguments(void) {
   fputs("previous", f);
   fclose(f);
   d.order = 11;
-  CHECK_STATUS(hoc_msh_write("p11.msh", &d), HOC_ERR_UNSUPPORTED);
+  CHECK_STATUS(hoc_msh_write("p11.msh", &d, &param41), HOC_ERR_UNSUPPORTED);
   d.order = 0;
-  CHECK_STATUS(hoc_msh_write("p0.msh", &d), HOC_ERR_ARGUMENT);
+  CHECK_STATUS(hoc_msh_write("p0.msh", &d, &param41), HOC_ERR_ARGUMENT);
   struct stat st;
   CHECK(stat("p11.msh", &st) != 0 && stat("p0.msh", &st) != 0);
   d.order = 2;
   double saved = m.xyz[7];
   m.xyz[7] = NAN;
-  CHECK_STATUS(hoc_msh_write("keep.msh", &d), HOC_ERR_ARGUMENT);
+  CHECK_STATUS(hoc_msh_write("keep.msh", &d, &param41), HOC_ERR_ARGUMENT);
   m.xyz[7] = INFINITY;
-  CHECK_STATUS(hoc_msh_write("keep.msh", &d), HOC_ERR_ARGUMENT);
+  CHECK_STATUS(hoc_msh_write("keep.msh", &d, &param41), HOC_ERR_ARGUMENT);
   m.xyz[7] = saved;
   size_t k = 0;
   while (m.dim[k] != 2)
     ++k;
   m.par[2 * k + 1] = NAN;
-  CHECK_STATUS(hoc_msh_write("keep.msh", &d), HOC_ERR_ARGUMENT);
+  CHECK_STATUS(hoc_msh_write("keep.msh", &d, &param41), HOC_ERR_ARGUMENT);
   m.par[2 * k + 1] = 0;
   m.ent[k] = 1000; /* no such surface */
-  CHECK_STATUS(hoc_msh_write("keep.msh", &d), HOC_ERR_ARGUMENT);
+  CHECK_STATUS(hoc_msh_write("keep.msh", &d, &param41), HOC_ERR_ARGUMENT);
   m.ent[k] = surface_tags[0];
   m.tri[5] = m.nn; /* no such node */
-  CHECK_STATUS(hoc_msh_write("keep.msh", &d), HOC_ERR_ARGUMENT);
+  CHECK_STATUS(hoc_msh_write("keep.msh", &d, &param41), HOC_ERR_ARGUMENT);
   m.tri[5] = 0;
   m.curve_tag[3] = m.curve_tag[4]; /* listed twice */
-  CHECK_STATUS(hoc_msh_write("keep.msh", &d), HOC_ERR_ARGUMENT);
+  CHECK_STATUS(hoc_msh_write("keep.msh", &d, &param41), HOC_ERR_ARGUMENT);
   m.curve_tag[3] = curve_tags[3];
   m.surface_bbox[2] = NAN;
-  CHECK_STATUS(hoc_msh_write("keep.msh", &d), HOC_ERR_ARGUMENT);
+  CHECK_STATUS(hoc_msh_write("keep.msh", &d, &param41), HOC_ERR_ARGUMENT);
   m.surface_bbox[2] = 0;
-  CHECK_STATUS(hoc_msh_write("no/such/dir/x.msh", &d), HOC_ERR_IO);
-  CHECK_STATUS(hoc_msh_write("keep.msh", NULL), HOC_ERR_ARGUMENT);
+  CHECK_STATUS(hoc_msh_write("no/such/dir/x.msh", &d, &param41), HOC_ERR_IO);
+  CHECK_STATUS(hoc_msh_write("keep.msh", NULL, &param41), HOC_ERR_ARGUMENT);
+  /* options out of range, parameters asked for but not given, 2.2's int tags */
+  const hoc_msh_options bad_options[] = {{40, 0, 0}, {4, 0, 0}, {22, 2, 0}, {41, -1, 0},
+                                         {41, 0, 2}, {22, 0, -1}};
+  for (size_t b = 0; b < sizeof bad_options / sizeof *bad_options; ++b)
+    CHECK_STATUS(hoc_msh_write("keep.msh", &d, &bad_options[b]), HOC_ERR_ARGUMENT);
+  d.param = NULL;
+  CHECK_STATUS(hoc_msh_write("keep.msh", &d, &param41), HOC_ERR_ARGUMENT);
+  CHECK(strstr(hoc_last_error(), "parametric") != NULL);
+  const hoc_msh_options plain22 = {22, 0, 0};
+  d.n_nodes = (size_t)INT32_MAX + 1; /* refused before any node is looked at */
+  CHECK_STATUS(hoc_msh_write("keep.msh", &d, &plain22), HOC_ERR_UNSUPPORTED);
+  CHECK(strstr(hoc_last_error(), "2.2") != NULL);
+  fill_write_data(&m, &d);
   f = fopen("keep.msh", "r");
   char buf[16] = {0};
   CHECK(f && fread(buf, 1, sizeof buf - 1, f) == 8 && !strcmp(buf, "previous"));
@@ -537,7 +585,7 @@ static void test_write_arguments(void) {
   /* an empty mesh is a valid file */
   hoc_msh_write_data e = {0};
   e.order = 3;
-  CHECK_OK(hoc_msh_write("empty.msh", &e));
+  CHECK_OK(hoc_msh_write("empty.msh", &e, &param41));
   hoc_msh_raw raw;
   CHECK_OK(hoc_msh_read("empty.msh", &raw));
   CHECK(raw.n_nodes == 0 && raw.n_tris == 0 && raw.order == 0);
@@ -675,7 +723,9 @@ static void test_gmsh_written(void) {
                {"gmsh41bin.msh", 1, 4.1, 1},
                {"gmsh41plain.msh", 0, 4.1, 0},
                {"gmsh22.msh", 0, 2.2, 0},
-               {"gmsh22param.msh", 0, 2.2, 1}};
+               {"gmsh22param.msh", 0, 2.2, 1},
+               {"gmsh22bin.msh", 1, 2.2, 0},
+               {"gmsh22parambin.msh", 1, 2.2, 1}};
   int ierr = 0;
   for (size_t f = 0; f < sizeof files / sizeof *files; ++f) {
     gmshOptionSetNumber("Mesh.Binary", files[f].binary, &ierr);
@@ -821,6 +871,87 @@ static void test_binary_variants(void) {
     }
 }
 
+/* The same mesh as binary MSH 2.2 (ints for tags, counts on text lines):
+ * parametric nodes 30 (curve 3), 10 and 20 (surface 5), then a point on
+ * node 30 (point 4), the line and the triangle in blocks of (type, count,
+ * 2 tags); `n_elems` in the header may lie, `ntags` is the tags per element. */
+static void make_binary22(bytes *b, int big, uint64_t n_elems, int ntags, int node) {
+  memset(b, 0, sizeof *b);
+  b->big = big, b->dsize = 8;
+  b_str(b, "$MeshFormat\n2.2 1 8\n");
+  b_int(b, 1);
+  b_str(b, "\n$EndMeshFormat\n$ParametricNodes\n3\n");
+  b_int(b, 30), b_real(b, 0), b_real(b, 1), b_real(b, 0), b_int(b, 1), b_int(b, 3);
+  b_real(b, 0.75);
+  b_int(b, 10), b_real(b, 0.125), b_real(b, 0), b_real(b, 0), b_int(b, 2), b_int(b, 5);
+  b_real(b, 0.25), b_real(b, 0.5);
+  b_int(b, 20), b_real(b, 1), b_real(b, 0), b_real(b, 0), b_int(b, 2), b_int(b, 5);
+  b_real(b, 1.25), b_real(b, 1.5);
+  char head[64];
+  snprintf(head, sizeof head, "\n$EndParametricNodes\n$Elements\n%llu\n",
+           (unsigned long long)n_elems);
+  b_str(b, head);
+  b_int(b, 15), b_int(b, 1), b_int(b, ntags);
+  b_int(b, 1);
+  for (int t = 0; t < ntags; ++t)
+    b_int(b, t == 1 ? 4 : 0);
+  b_int(b, node);
+  b_int(b, 1), b_int(b, 1), b_int(b, ntags);
+  b_int(b, 2);
+  for (int t = 0; t < ntags; ++t)
+    b_int(b, t == 1 ? 3 : 0);
+  b_int(b, 20), b_int(b, 30);
+  b_int(b, 2), b_int(b, 1), b_int(b, ntags);
+  b_int(b, 3);
+  for (int t = 0; t < ntags; ++t)
+    b_int(b, t == 1 ? 5 : 7);
+  b_int(b, 10), b_int(b, 20), b_int(b, 30);
+  b_str(b, "\n$EndElements\n");
+}
+
+static void test_binary22(void) {
+  bytes b;
+  for (int big = 0; big < 2; ++big) {
+    make_binary22(&b, big, 3, 2, 30);
+    hoc_msh_raw raw;
+    CHECK_OK(hoc_msh_read_buffer(b.data, b.n, "handmade22", &raw));
+    int ok = raw.order == 1 && raw.n_nodes == 3 && raw.n_tris == 1 && raw.n_lines == 1;
+    if (ok) {
+      ok &= raw.node_tag[0] == 30 && raw.node_tag[1] == 10 && raw.node_tag[2] == 20;
+      ok &= raw.tri_nodes[0] == 1 && raw.tri_nodes[1] == 2 && raw.tri_nodes[2] == 0;
+      ok &= raw.line_nodes[0] == 2 && raw.line_nodes[1] == 0 && raw.line_curve_tag[0] == 3;
+      ok &= raw.xyz[3] == 0.125 && raw.param[2] == 0.25 && raw.param[3] == 0.5 &&
+            raw.param[0] == 0.75;
+      /* $ParametricNodes classify: node 30 stays on curve 3 despite the point element */
+      ok &= raw.node_dim[0] == 1 && raw.node_entity_tag[0] == 3;
+      ok &= raw.node_dim[1] == 2 && raw.node_entity_tag[1] == 5 && raw.tri_surface_tag[0] == 5;
+      ok &= raw.has_param[0] && raw.has_param[1];
+    }
+    CHECK(ok);
+    hoc_msh_raw_free(&raw);
+    /* three tags (a partition count) per element are read past */
+    make_binary22(&b, big, 3, 3, 30);
+    CHECK_OK(hoc_msh_read_buffer(b.data, b.n, "tags22", &raw));
+    CHECK(raw.n_tris == 1 && raw.tri_surface_tag[0] == 5 && raw.line_curve_tag[0] == 3);
+    hoc_msh_raw_free(&raw);
+    /* counts that lie, negative tags, unknown nodes */
+    make_binary22(&b, big, 4, 2, 30);
+    CHECK_STATUS(hoc_msh_read_buffer(b.data, b.n, "more22", &raw), HOC_ERR_FORMAT);
+    make_binary22(&b, big, 2, 2, 30);
+    CHECK_STATUS(hoc_msh_read_buffer(b.data, b.n, "fewer22", &raw), HOC_ERR_FORMAT);
+    make_binary22(&b, big, UINT64_C(1) << 40, 2, 30);
+    CHECK_STATUS(hoc_msh_read_buffer(b.data, b.n, "huge22", &raw), HOC_ERR_FORMAT);
+    CHECK(strstr(hoc_last_error(), "more than the rest") != NULL);
+    make_binary22(&b, big, 3, -1, 30);
+    CHECK_STATUS(hoc_msh_read_buffer(b.data, b.n, "ntags22", &raw), HOC_ERR_FORMAT);
+    make_binary22(&b, big, 3, 2, -30);
+    CHECK_STATUS(hoc_msh_read_buffer(b.data, b.n, "negative22", &raw), HOC_ERR_FORMAT);
+    make_binary22(&b, big, 3, 2, 31);
+    CHECK_STATUS(hoc_msh_read_buffer(b.data, b.n, "unknown22", &raw), HOC_ERR_FORMAT);
+    CHECK(strstr(hoc_last_error(), "node 31") != NULL);
+  }
+}
+
 /* Corrupt input ------------------------------------------------------------------------- */
 
 /* A successful read must be self-consistent. */
@@ -956,7 +1087,6 @@ static void test_corrupt_inputs(void) {
       {"$MeshFormat\nfour 0 8\n$EndMeshFormat\n", HOC_ERR_FORMAT, "version"},
       {"$MeshFormat\n4 0 8\n$EndMeshFormat\n", HOC_ERR_UNSUPPORTED, "4"},
       {"$MeshFormat\n3.0 0 8\n$EndMeshFormat\n", HOC_ERR_UNSUPPORTED, NULL},
-      {"$MeshFormat\n2.2 1 8\n\x01\0\0\0\n$EndMeshFormat\n", HOC_ERR_UNSUPPORTED, "binary"},
       {"$MeshFormat\n4.1 2 8\n$EndMeshFormat\n", HOC_ERR_FORMAT, "file type"},
       {"$MeshFormat\n4.1 0 7\n$EndMeshFormat\n", HOC_ERR_FORMAT, "data size"},
       {"$MeshFormat\n4.1 1 8\n\x02\x02\x02\x02\n$EndMeshFormat\n", HOC_ERR_FORMAT, "byte-order"},
@@ -1073,11 +1203,17 @@ int main(void) {
   gmshFinalize(&ierr);
   test_corpus();
   test_binary_variants();
+  test_binary22();
   test_corrupt_inputs();
-  test_corrupt_file("synth_p3.msh");
+  test_corrupt_file("synth_p3_41_param.msh");
+  test_corrupt_file("synth_p3_22.msh");
   test_corrupt_file("gmsh41.msh");
   test_corrupt_file("gmsh41bin.msh");
   test_corrupt_file("gmsh22.msh");
   test_corrupt_file("gmsh22param.msh");
+  test_corrupt_file("gmsh22bin.msh");
+  test_corrupt_file("gmsh22parambin.msh");
+  test_corrupt_file("synth_p3_22bin_param.msh");
+  test_corrupt_file("synth_p3_41bin.msh");
   return test_report();
 }

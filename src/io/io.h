@@ -1,4 +1,4 @@
-/* File formats: gmsh MSH 4.1 (write, read), VTK .vtu (write), and atomic
+/* File formats: gmsh MSH 4.1 and 2.2 (write, read), VTK .vtu (write), and atomic
  * output files. This module knows nothing of CAD: it moves arrays.
  * SPDX-License-Identifier: GPL-2.0-or-later
  */
@@ -40,7 +40,7 @@ void hoc_outfile_abort(hoc_outfile *out);
  *  async-signal-safe calls; up to 32 files open at once are tracked). */
 void hoc_outfile_abort_all_from_signal(void);
 
-/* gmsh MSH 4.1 ------------------------------------------------------------ */
+/* gmsh MSH 4.1 and 2.2 ---------------------------------------------------- */
 
 /** What hoc_msh_write writes. Arrays are borrowed. */
 typedef struct hoc_msh_write_data {
@@ -61,7 +61,8 @@ typedef struct hoc_msh_write_data {
   /* $Nodes: every node on an entity listed above */
   size_t n_nodes;
   const double *xyz;          /* [n_nodes][3] */
-  const double *param;        /* [n_nodes][2]: u,v on a surface, t (first) on a curve */
+  const double *param;        /* [n_nodes][2]: u,v on a surface, t (first) on a curve;
+                                 may be NULL if options->parametric is 0 */
   const int *node_dim;        /* [n_nodes] 0, 1, 2 */
   const int *node_entity_tag; /* [n_nodes] kernel tag of the node's entity */
   /* $Elements: triangles of order p on surfaces, lines of order p on curves */
@@ -74,17 +75,27 @@ typedef struct hoc_msh_write_data {
   const int *line_curve_tag;  /* [n_lines] */
 } hoc_msh_write_data;
 
-/** Write an ASCII MSH 4.1 file with parametric nodes (atomically). Node
- *  tags are 1..n_nodes in output order; nodes are grouped in one block per
- *  entity, blocks sorted by (dim, tag), in the caller's order inside a
- *  block; elements likewise (lines, then triangles), tags 1..n. Numbers are
- *  written as printf "%.17g" writes them, so they read back bit for bit.
- *  `param` may be NULL (blocks then say "not parametric").
- *  Everything is checked before the file is created: HOC_ERR_ARGUMENT for a
- *  non-finite coordinate, parameter or bounding box, a node or element on an
- *  entity not listed, a node index out of range, a tag listed twice;
- *  HOC_ERR_UNSUPPORTED for an order above 10. */
-hoc_status hoc_msh_write(const char *path, const hoc_msh_write_data *data);
+/** Write an MSH file (atomically) as `options` say (NULL: MSH 4.1 ASCII
+ *  without parameters). Node tags are 1..n_nodes in output order; nodes are
+ *  grouped in one block per entity, blocks sorted by (dim, tag), in the
+ *  caller's order inside a block; elements likewise (lines, then
+ *  triangles), tags 1..n. ASCII numbers are written as printf "%.17g"
+ *  writes them, binary ones as they are, so they read back bit for bit.
+ *  MSH 4.1: $Entities (no physical tags), node blocks parametric only if
+ *  options->parametric. MSH 2.2: no $Entities; $Nodes, or $ParametricNodes
+ *  ("tag x y z dim entity [t | u v]") if options->parametric; elements
+ *  "tag type 2 0 entity nodes..." (physical 0, elementary the entity), a
+ *  point element (type 15) on each node of a point entity first, then the
+ *  lines and triangles; binary 2.2 elements in one block (type, count, 2)
+ *  per entity.
+ *  Everything is checked before the file is created: HOC_ERR_ARGUMENT for an
+ *  option out of range, parameters asked for without `param`, a non-finite
+ *  coordinate, parameter or bounding box, a node or element on an entity not
+ *  listed, a node index out of range, a tag listed twice;
+ *  HOC_ERR_UNSUPPORTED for an order above 10, or a 2.2 file whose node or
+ *  element tags would not fit an int. */
+hoc_status hoc_msh_write(const char *path, const hoc_msh_write_data *data,
+                         const hoc_msh_options *options);
 
 /** A mesh as read from an MSH file: surface triangles and curve lines, the
  *  nodes they use, and each node's classification. */
@@ -105,8 +116,9 @@ typedef struct hoc_msh_raw {
   int *line_curve_tag;        /* [n_lines] */
 } hoc_msh_raw;
 
-/** Read a MSH 4.1 (ASCII or binary, either byte order) or MSH 2.x (ASCII)
- *  file. Keeps the complete triangles (all of one order, else
+/** Read a MSH 4.1 or MSH 2.x file (ASCII or binary, either byte order;
+ *  binary 2.x: its int tags, as gmsh writes them). Keeps the complete
+ *  triangles (all of one order, else
  *  HOC_ERR_UNSUPPORTED; incomplete ones are HOC_ERR_UNSUPPORTED too) and
  *  the lines of the same order; skips every other element and section, and
  *  drops the nodes no kept element uses. Nodes keep their file order.

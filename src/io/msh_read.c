@@ -1,4 +1,4 @@
-/* gmsh MSH reader: 4.1 ASCII and binary, 2.2 ASCII. Keeps the surface
+/* gmsh MSH reader: 4.1 and 2.2, ASCII and binary. Keeps the surface
  * triangles (of one order) and the curve lines of that order, and the nodes
  * they use with their classification. Every count in the file is checked
  * against what the rest of the file can hold before anything is allocated
@@ -655,15 +655,41 @@ static hoc_status read_elements41(scan *s, mesh_in *m) {
 
 /* MSH 2.x ---------------------------------------------------------------------- */
 
+/* A count on a text line of its own: MSH 2.x writes the counts of its
+ * sections so in binary files too, the binary records starting on the next
+ * line. */
+static hoc_status text_count(scan *s, uint64_t *n, const char *what) {
+  int binary = s->binary;
+  s->binary = 0;
+  hoc_status st = get_size(s, n, what);
+  s->binary = binary;
+  if (st == HOC_OK && binary) skip_line(s);
+  return st;
+}
+
+/* A node tag of a 2.x file (an int in binary files), > 0. */
+static hoc_status tag2(scan *s, uint64_t *tag, const char *what) {
+  if (s->binary) {
+    int t;
+    HOC_TRY(get_int(s, &t, what));
+    if (t <= 0) FAIL(s, "%s %d (positive expected)", what, t);
+    *tag = (uint64_t)t;
+    return HOC_OK;
+  }
+  HOC_TRY(get_size(s, tag, what));
+  if (!*tag) FAIL(s, "%s 0", what);
+  return HOC_OK;
+}
+
 /* $Nodes (tag x y z) or $ParametricNodes (tag x y z dim entity [u [v]]). */
 static hoc_status read_nodes2(scan *s, mesh_in *m, int parametric) {
-  uint64_t n;
-  HOC_TRY(get_size(s, &n, "the number of nodes"));
-  HOC_TRY(check_count(s, n, min_bytes(s, parametric ? 2 : 0, 1, 3), "the number of nodes"));
+  uint64_t n = 0;
+  HOC_TRY(text_count(s, &n, "the number of nodes"));
+  size_t ints = (s->binary ? 1 : 0) + (parametric ? 2 : 0), sizes = s->binary ? 0 : 1;
+  HOC_TRY(check_count(s, n, min_bytes(s, ints, sizes, 3), "the number of nodes"));
   HOC_TRY(alloc_nodes(m, (size_t)n));
   for (size_t k = 0; k < n; ++k) {
-    HOC_TRY(get_size(s, &m->tag[k], "a node tag"));
-    if (!m->tag[k]) FAIL(s, "node tag 0");
+    HOC_TRY(tag2(s, &m->tag[k], "node tag"));
     for (int c = 0; c < 3; ++c)
       HOC_TRY(get_real(s, &m->xyz[3 * k + (size_t)c], "node coordinates"));
     m->dim[k] = -1;
@@ -684,36 +710,78 @@ static hoc_status read_nodes2(scan *s, mesh_in *m, int parametric) {
   return expect_end(s, parametric ? "ParametricNodes" : "Nodes");
 }
 
+/* One element of a 2.x file after its type: tags (physical, elementary
+ * entity, partitions...) then nn node tags, kept if its type is. */
+static hoc_status read_element2(scan *s, mesh_in *m, int type, int ntags, int nn, int kept,
+                                uint64_t *tags, size_t *pos) {
+  int ent = 0;
+  for (int j = 0; j < ntags; ++j) {
+    int t = 0;
+    HOC_TRY(get_int(s, &t, "an element's tags"));
+    if (j == 1) ent = t;
+  }
+  for (int j = 0; j < nn; ++j)
+    HOC_TRY(tag2(s, &tags[j], "an element's node"));
+  if (!kept) return HOC_OK;
+  HOC_TRY(element_nodes(s, m, tags, nn, pos));
+  keep_element(m, type, ent, pos);
+  return HOC_OK;
+}
+
+/* ASCII: "tag type ntags tags... nodes..." per line. Binary: blocks of a
+ * header (type, count, ntags) and count records "tag tags... nodes...",
+ * all int. */
 static hoc_status read_elements2(scan *s, mesh_in *m) {
-  uint64_t n, tags[MAX_ELEMENT_NODES];
+  uint64_t n = 0, done = 0, tags[MAX_ELEMENT_NODES];
   size_t pos[MAX_ELEMENT_NODES];
-  HOC_TRY(get_size(s, &n, "the number of elements"));
-  HOC_TRY(check_count(s, n, min_bytes(s, 2, 2, 0), "the number of elements"));
-  for (uint64_t k = 0; k < n; ++k) {
-    uint64_t etag;
-    int type, ntags, ent = 0;
-    HOC_TRY(get_size(s, &etag, "an element tag"));
-    HOC_TRY(get_int(s, &type, "an element's type"));
-    HOC_TRY(get_int(s, &ntags, "an element's number of tags"));
-    if (ntags < 0) FAIL(s, "element %llu has %d tags", (unsigned long long)etag, ntags);
-    HOC_TRY(check_count(s, (uint64_t)ntags, 2, "an element's number of tags"));
-    for (int j = 0; j < ntags; ++j) {
-      int t = 0;
-      HOC_TRY(get_int(s, &t, "an element's tags"));
-      if (j == 1) ent = t; /* physical, elementary entity, partitions... */
+  HOC_TRY(text_count(s, &n, "the number of elements"));
+  /* at least "tag type ntags node" in ASCII, a tag and a node in binary */
+  HOC_TRY(check_count(s, n, s->binary ? 8 : min_bytes(s, 2, 2, 0), "the number of elements"));
+  while (done < n) {
+    int type, ntags, count = 1;
+    if (s->binary) {
+      HOC_TRY(get_int(s, &type, "an element block's type"));
+      HOC_TRY(get_int(s, &count, "an element block's size"));
+      HOC_TRY(get_int(s, &ntags, "an element block's number of tags"));
+      if (count <= 0 || (uint64_t)count > n - done)
+        FAIL(s, "an element block of %d elements (1 to the %llu left expected)", count,
+             (unsigned long long)(n - done));
+    } else {
+      uint64_t etag;
+      HOC_TRY(get_size(s, &etag, "an element tag"));
+      HOC_TRY(get_int(s, &type, "an element's type"));
+      HOC_TRY(get_int(s, &ntags, "an element's number of tags"));
     }
+    if (ntags < 0) FAIL(s, "elements with %d tags", ntags);
+    HOC_TRY(check_count(s, (uint64_t)ntags, min_bytes(s, 1, 0, 0), "an element's number of tags"));
     int nn = hoc_msh_element_nodes(type);
-    if (!nn) { /* unknown size: the rest of the line */
+    if (!nn) { /* unknown size: the rest of an ASCII line */
+      if (s->binary)
+        FAIL_UNSUPPORTED(s, "element type %d (of unknown size) in a binary file", type);
+      for (int j = 0; j < ntags; ++j) {
+        int t;
+        HOC_TRY(get_int(s, &t, "an element's tags"));
+      }
       skip_line(s);
+      ++done;
       continue;
     }
     HOC_TRY(check_kept_type(s, m, type, -1));
-    for (int j = 0; j < nn; ++j)
-      HOC_TRY(get_size(s, &tags[j], "an element's nodes"));
-    if (!is_kept_type(m, type)) continue;
-    HOC_TRY(element_nodes(s, m, tags, nn, pos));
-    HOC_TRY(reserve_block(m, type, 1, nn));
-    keep_element(m, type, ent, pos);
+    int kept = is_kept_type(m, type);
+    if (s->binary) {
+      size_t rec = min_bytes(s, 1 + (size_t)ntags + (size_t)nn, 0, 0);
+      HOC_TRY(check_count(s, (uint64_t)count, rec, "the size of an element block"));
+      if (kept) HOC_TRY(reserve_block(m, type, (size_t)count, nn));
+      for (int k = 0; k < count; ++k) {
+        int t;
+        HOC_TRY(get_int(s, &t, "an element tag"));
+        HOC_TRY(read_element2(s, m, type, ntags, nn, kept, tags, pos));
+      }
+    } else {
+      if (kept) HOC_TRY(reserve_block(m, type, 1, nn));
+      HOC_TRY(read_element2(s, m, type, ntags, nn, kept, tags, pos));
+    }
+    done += (uint64_t)count;
   }
   return expect_end(s, "Elements");
 }
@@ -837,8 +905,8 @@ static hoc_status read_header(scan *s, mesh_in *m) {
   if (file_type != 0 && file_type != 1) FAIL(s, "file type %d (0 or 1 expected)", file_type);
   if (data_size != 4 && data_size != 8) FAIL(s, "data size %d (8 expected)", data_size);
   if (file_type == 1) {
-    if (m->v2)
-      FAIL_UNSUPPORTED(s, "binary MSH 2 files are not supported (ASCII 2.2 or MSH 4.1 are)");
+    if (m->v2 && data_size != 8)
+      FAIL_UNSUPPORTED(s, "binary MSH 2 file of %d-byte reals (8 expected)", data_size);
     skip_line(s);
     uint32_t one;
     if ((size_t)(s->end - s->p) < sizeof one) FAIL(s, "the file ends in the binary header");

@@ -1,7 +1,8 @@
-/* gmsh MSH 4.1 ASCII writer: entities, parametric nodes grouped by entity,
- * curve lines and surface triangles of order 1..10. Also the MSH element
- * type tables and the exact decimal conversion (printf "%.17g" semantics)
- * that the writer and the reader share.
+/* gmsh MSH writer, 4.1 and 2.2, ASCII and binary: nodes grouped by entity
+ * (with their parametric coordinates if asked), curve lines and surface
+ * triangles of order 1..10, and in 4.1 the entities, in 2.2 point elements.
+ * Also the MSH element type tables and the exact decimal conversion (printf
+ * "%.17g" semantics) that the writer and the reader share.
  * SPDX-License-Identifier: GPL-2.0-or-later */
 #include "io/io.h"
 
@@ -317,7 +318,9 @@ typedef struct wbuf {
   FILE *fp;
   char *buf;
   size_t len;
-  int err; /* errno of the first failed write, 0 if none */
+  int err;    /* errno of the first failed write, 0 if none */
+  int binary; /* fields as raw bytes in the host's order instead of text */
+  int fresh;  /* no field yet on this ASCII line */
 } wbuf;
 
 static void wb_flush(wbuf *w) {
@@ -346,6 +349,11 @@ static inline void wb_char(wbuf *w, char c) {
   ++w->len;
 }
 
+static inline void wb_bytes(wbuf *w, const void *p, size_t n) { /* n <= WBUF_ITEM */
+  memcpy(wb_room(w), p, n);
+  w->len += n;
+}
+
 static inline void wb_u64(wbuf *w, uint64_t x) {
   char *s = wb_room(w);
   w->len += format_u64(x, s);
@@ -363,6 +371,72 @@ static inline void wb_int(wbuf *w, int x) {
 static inline void wb_double(wbuf *w, double x) {
   char *s = wb_room(w);
   w->len += hoc_io_format_double(x, s);
+}
+
+/* Fields of the file's records: in ASCII, separated by one space within a
+ * line and ended by f_eol; in binary, their bytes (int: 4, size: 8, real:
+ * 8) with nothing between them. */
+static inline void f_sep(wbuf *w) {
+  if (!w->fresh) wb_char(w, ' ');
+  w->fresh = 0;
+}
+
+static inline void f_int(wbuf *w, int x) {
+  if (w->binary) {
+    int32_t v = x;
+    wb_bytes(w, &v, sizeof v);
+    return;
+  }
+  f_sep(w);
+  wb_int(w, x);
+}
+
+static inline void f_size(wbuf *w, uint64_t x) {
+  if (w->binary) {
+    wb_bytes(w, &x, sizeof x);
+    return;
+  }
+  f_sep(w);
+  wb_u64(w, x);
+}
+
+static inline void f_real(wbuf *w, double x) {
+  if (w->binary) {
+    wb_bytes(w, &x, sizeof x);
+    return;
+  }
+  f_sep(w);
+  wb_double(w, x);
+}
+
+static inline void f_eol(wbuf *w) {
+  if (!w->binary) wb_char(w, '\n');
+  w->fresh = 1;
+}
+
+/* A section's first line, text in either mode; binary records start after it. */
+static void section_begin(wbuf *w, const char *name) {
+  wb_char(w, '$');
+  wb_str(w, name);
+  wb_char(w, '\n');
+  w->fresh = 1;
+}
+
+/* "$EndName" on a line of its own (after the binary records' last byte). */
+static void section_end(wbuf *w, const char *name) {
+  if (w->binary) wb_char(w, '\n');
+  wb_str(w, "$End");
+  wb_str(w, name);
+  wb_char(w, '\n');
+  w->fresh = 1;
+}
+
+/* A count on a text line of its own (MSH 2.2 writes its counts so in binary
+ * files too). */
+static void text_count(wbuf *w, uint64_t n) {
+  wb_u64(w, n);
+  wb_char(w, '\n');
+  w->fresh = 1;
 }
 
 /* Entities ------------------------------------------------------------------ */
@@ -589,127 +663,110 @@ done:
   return status;
 }
 
-/* The file ------------------------------------------------------------------------ */
+/* MSH 4.1 ------------------------------------------------------------------------ */
 
 static void write_bbox_and_boundary(wbuf *w, const double *bbox, const int *bnd_start,
                                     const int *bnd, int k) {
-  for (int c = 0; c < 6; ++c) {
-    wb_char(w, ' ');
-    wb_double(w, bbox[6 * (size_t)k + (size_t)c]);
-  }
-  wb_str(w, " 0 "); /* no physical tags */
-  wb_int(w, bnd_start[k + 1] - bnd_start[k]);
-  for (int j = bnd_start[k]; j < bnd_start[k + 1]; ++j) {
-    wb_char(w, ' ');
-    wb_int(w, bnd[j]);
-  }
-  wb_char(w, '\n');
+  for (int c = 0; c < 6; ++c)
+    f_real(w, bbox[6 * (size_t)k + (size_t)c]);
+  f_size(w, 0); /* no physical tags */
+  f_size(w, (uint64_t)(bnd_start[k + 1] - bnd_start[k]));
+  for (int j = bnd_start[k]; j < bnd_start[k + 1]; ++j)
+    f_int(w, bnd[j]);
+  f_eol(w);
 }
 
-static void write_entities(wbuf *w, const hoc_msh_write_data *d, const layout *L) {
-  wb_str(w, "$Entities\n");
-  wb_int(w, d->n_points);
-  wb_char(w, ' ');
-  wb_int(w, d->n_curves);
-  wb_char(w, ' ');
-  wb_int(w, d->n_surfaces);
-  wb_str(w, " 0\n");
+static void write_entities41(wbuf *w, const hoc_msh_write_data *d, const layout *L) {
+  section_begin(w, "Entities");
+  f_size(w, (uint64_t)d->n_points);
+  f_size(w, (uint64_t)d->n_curves);
+  f_size(w, (uint64_t)d->n_surfaces);
+  f_size(w, 0);
+  f_eol(w);
   for (int r = 0; r < d->n_points; ++r) { /* tag x y z 0 */
     int k = L->ent[0].index[r];
-    wb_int(w, d->point_tag[k]);
-    for (int c = 0; c < 3; ++c) {
-      wb_char(w, ' ');
-      wb_double(w, d->point_xyz[3 * (size_t)k + (size_t)c]);
-    }
-    wb_str(w, " 0\n");
+    f_int(w, d->point_tag[k]);
+    for (int c = 0; c < 3; ++c)
+      f_real(w, d->point_xyz[3 * (size_t)k + (size_t)c]);
+    f_size(w, 0);
+    f_eol(w);
   }
   for (int r = 0; r < d->n_curves; ++r) {
     int k = L->ent[1].index[r];
-    wb_int(w, d->curve_tag[k]);
+    f_int(w, d->curve_tag[k]);
     write_bbox_and_boundary(w, d->curve_bbox, d->curve_bnd_start, d->curve_bnd, k);
   }
   for (int r = 0; r < d->n_surfaces; ++r) {
     int k = L->ent[2].index[r];
-    wb_int(w, d->surface_tag[k]);
+    f_int(w, d->surface_tag[k]);
     write_bbox_and_boundary(w, d->surface_bbox, d->surface_bnd_start, d->surface_bnd, k);
   }
-  wb_str(w, "$EndEntities\n");
+  section_end(w, "Entities");
 }
 
-static void write_nodes(wbuf *w, const hoc_msh_write_data *d, const layout *L) {
+static void write_nodes41(wbuf *w, const hoc_msh_write_data *d, const layout *L) {
   size_t nn = d->n_nodes;
   int used = 0;
   for (int b = 0; b < L->n_blocks; ++b)
     used += L->block_start[b + 1] > L->block_start[b];
-  wb_str(w, "$Nodes\n");
-  wb_int(w, used);
-  wb_char(w, ' ');
-  wb_u64(w, nn);
-  wb_str(w, nn ? " 1 " : " 0 ");
-  wb_u64(w, nn);
-  wb_char(w, '\n');
+  section_begin(w, "Nodes");
+  f_size(w, (uint64_t)used);
+  f_size(w, nn);
+  f_size(w, nn ? 1 : 0);
+  f_size(w, nn);
+  f_eol(w);
   int b = 0;
   for (int dim = 0; dim < 3; ++dim)
     for (int r = 0; r < L->ent[dim].n; ++r, ++b) {
       size_t first = L->block_start[b], last = L->block_start[b + 1];
       if (first == last) continue;
       /* dim tag parametric count, then the tags, then x y z [t | u v] */
-      wb_int(w, dim);
-      wb_char(w, ' ');
-      wb_int(w, L->ent[dim].tag[r]);
-      wb_str(w, d->param ? " 1 " : " 0 ");
-      wb_u64(w, last - first);
-      wb_char(w, '\n');
+      f_int(w, dim);
+      f_int(w, L->ent[dim].tag[r]);
+      f_int(w, d->param ? 1 : 0);
+      f_size(w, last - first);
+      f_eol(w);
       for (size_t k = first; k < last; ++k) {
-        wb_u64(w, k + 1);
-        wb_char(w, '\n');
+        f_size(w, k + 1);
+        f_eol(w);
       }
       for (size_t k = first; k < last; ++k) {
         size_t i = L->node_order[k];
         const double *x = d->xyz + 3 * i; /* [3] */
-        wb_double(w, x[0]);
-        wb_char(w, ' ');
-        wb_double(w, x[1]);
-        wb_char(w, ' ');
-        wb_double(w, x[2]);
+        f_real(w, x[0]);
+        f_real(w, x[1]);
+        f_real(w, x[2]);
         if (d->param)
-          for (int c = 0; c < dim; ++c) {
-            wb_char(w, ' ');
-            wb_double(w, d->param[2 * i + (size_t)c]);
-          }
-        wb_char(w, '\n');
+          for (int c = 0; c < dim; ++c)
+            f_real(w, d->param[2 * i + (size_t)c]);
+        f_eol(w);
       }
     }
-  wb_str(w, "$EndNodes\n");
+  section_end(w, "Nodes");
 }
 
 /* One element block per entity: lines on curves, triangles on surfaces. */
-static void write_element_blocks(wbuf *w, const layout *L, const entity_list *ents, int dim,
-                                 int type, const size_t *start, const size_t *order,
-                                 const size_t *nodes, int nper, size_t *next_tag) {
+static void write_element_blocks41(wbuf *w, const layout *L, const entity_list *ents, int dim,
+                                   int type, const size_t *start, const size_t *order,
+                                   const size_t *nodes, int nper, size_t *next_tag) {
   for (int r = 0; r < ents->n; ++r) {
     if (start[r + 1] == start[r]) continue;
-    wb_int(w, dim);
-    wb_char(w, ' ');
-    wb_int(w, ents->tag[r]);
-    wb_char(w, ' ');
-    wb_int(w, type);
-    wb_char(w, ' ');
-    wb_u64(w, start[r + 1] - start[r]);
-    wb_char(w, '\n');
+    f_int(w, dim);
+    f_int(w, ents->tag[r]);
+    f_int(w, type);
+    f_size(w, start[r + 1] - start[r]);
+    f_eol(w);
     for (size_t k = start[r]; k < start[r + 1]; ++k) {
       const size_t *en = nodes + order[k] * (size_t)nper; /* [nper] caller's node indices */
-      wb_u64(w, (*next_tag)++);
-      for (int j = 0; j < nper; ++j) {
-        wb_char(w, ' ');
-        wb_u64(w, L->node_tag[en[j]]);
-      }
-      wb_char(w, '\n');
+      f_size(w, (*next_tag)++);
+      for (int j = 0; j < nper; ++j)
+        f_size(w, L->node_tag[en[j]]);
+      f_eol(w);
     }
   }
 }
 
-static void write_elements(wbuf *w, const hoc_msh_write_data *d, const layout *L) {
+static void write_elements41(wbuf *w, const hoc_msh_write_data *d, const layout *L) {
   int p = d->order, np = (p + 1) * (p + 2) / 2;
   size_t ne = d->n_lines + d->n_tris;
   int used = 0;
@@ -717,24 +774,133 @@ static void write_elements(wbuf *w, const hoc_msh_write_data *d, const layout *L
     used += L->lblock_start[r + 1] > L->lblock_start[r];
   for (int r = 0; r < d->n_surfaces; ++r)
     used += L->tblock_start[r + 1] > L->tblock_start[r];
-  wb_str(w, "$Elements\n");
-  wb_int(w, used);
-  wb_char(w, ' ');
-  wb_u64(w, ne);
-  wb_str(w, ne ? " 1 " : " 0 ");
-  wb_u64(w, ne);
-  wb_char(w, '\n');
+  section_begin(w, "Elements");
+  f_size(w, (uint64_t)used);
+  f_size(w, ne);
+  f_size(w, ne ? 1 : 0);
+  f_size(w, ne);
+  f_eol(w);
   size_t next_tag = 1;
-  write_element_blocks(w, L, &L->ent[1], 1, hoc_msh_line_type(p), L->lblock_start, L->line_order,
-                       d->line_nodes, p + 1, &next_tag);
-  write_element_blocks(w, L, &L->ent[2], 2, hoc_msh_triangle_type(p), L->tblock_start, L->tri_order,
-                       d->tri_nodes, np, &next_tag);
-  wb_str(w, "$EndElements\n");
+  write_element_blocks41(w, L, &L->ent[1], 1, hoc_msh_line_type(p), L->lblock_start,
+                         L->line_order, d->line_nodes, p + 1, &next_tag);
+  write_element_blocks41(w, L, &L->ent[2], 2, hoc_msh_triangle_type(p), L->tblock_start,
+                         L->tri_order, d->tri_nodes, np, &next_tag);
+  section_end(w, "Elements");
 }
 
-hoc_status hoc_msh_write(const char *path, const hoc_msh_write_data *d) {
+/* MSH 2.2 ------------------------------------------------------------------------ */
+
+/* "tag x y z" or, parametric, "tag x y z dim entity [t | u v]", in file order
+ * (the nodes of each entity together, as in 4.1). */
+static void write_nodes22(wbuf *w, const hoc_msh_write_data *d, const layout *L) {
+  const char *name = d->param ? "ParametricNodes" : "Nodes";
+  section_begin(w, name);
+  text_count(w, d->n_nodes);
+  int b = 0;
+  for (int dim = 0; dim < 3; ++dim)
+    for (int r = 0; r < L->ent[dim].n; ++r, ++b)
+      for (size_t k = L->block_start[b]; k < L->block_start[b + 1]; ++k) {
+        size_t i = L->node_order[k];
+        f_int(w, (int)(k + 1));
+        for (int c = 0; c < 3; ++c)
+          f_real(w, d->xyz[3 * i + (size_t)c]);
+        if (d->param) {
+          f_int(w, dim);
+          f_int(w, L->ent[dim].tag[r]);
+          for (int c = 0; c < dim; ++c)
+            f_real(w, d->param[2 * i + (size_t)c]);
+        }
+        f_eol(w);
+      }
+  section_end(w, name);
+}
+
+/* Elements of `count` per entity (start[n_entities + 1] offsets): ASCII
+ * "tag type 2 0 entity nodes...", binary one header (type, count, 2) per
+ * entity then "tag 0 entity nodes..." as ints. node(item, j) is the file
+ * tag of the j-th node of the item-th element in file order. */
+typedef struct elements22 {
+  int type, nper;
+  const entity_list *ents;
+  const size_t *start;   /* [ents->n + 1] */
+  const size_t *order;   /* [count] caller's element at each file position, or NULL */
+  const size_t *nodes;   /* [][nper] caller's node indices, or NULL: the item is a node */
+} elements22;
+
+static void write_elements22_kind(wbuf *w, const layout *L, const elements22 *k,
+                                  size_t *next_tag) {
+  for (int r = 0; r < k->ents->n; ++r) {
+    size_t first = k->start[r], last = k->start[r + 1];
+    if (first == last) continue;
+    if (w->binary) {
+      f_int(w, k->type);
+      f_int(w, (int)(last - first));
+      f_int(w, 2);
+    }
+    for (size_t q = first; q < last; ++q) {
+      f_int(w, (int)(*next_tag)++);
+      if (!w->binary) {
+        f_int(w, k->type);
+        f_int(w, 2);
+      }
+      f_int(w, 0); /* physical: none */
+      f_int(w, k->ents->tag[r]);
+      if (k->nodes) {
+        const size_t *en = k->nodes + k->order[q] * (size_t)k->nper; /* [nper] */
+        for (int j = 0; j < k->nper; ++j)
+          f_int(w, (int)L->node_tag[en[j]]);
+      } else {
+        f_int(w, (int)(q + 1)); /* point element on the node of file tag q + 1 */
+      }
+      f_eol(w);
+    }
+  }
+}
+
+static void write_elements22(wbuf *w, const hoc_msh_write_data *d, const layout *L) {
+  int p = d->order, np = (p + 1) * (p + 2) / 2;
+  size_t n_points = L->block_start[L->ent[0].n];
+  section_begin(w, "Elements");
+  text_count(w, n_points + d->n_lines + d->n_tris);
+  size_t next_tag = 1;
+  /* the nodes of the point entities are the first n_points in file order */
+  elements22 points = {15, 1, &L->ent[0], L->block_start, NULL, NULL};
+  elements22 lines = {hoc_msh_line_type(p), p + 1, &L->ent[1], L->lblock_start, L->line_order,
+                      d->line_nodes};
+  elements22 tris = {hoc_msh_triangle_type(p), np, &L->ent[2], L->tblock_start, L->tri_order,
+                     d->tri_nodes};
+  write_elements22_kind(w, L, &points, &next_tag);
+  write_elements22_kind(w, L, &lines, &next_tag);
+  write_elements22_kind(w, L, &tris, &next_tag);
+  section_end(w, "Elements");
+}
+
+/* The file ------------------------------------------------------------------------ */
+
+void hoc_msh_options_default(hoc_msh_options *options) {
+  if (!options) return;
+  memset(options, 0, sizeof *options);
+  options->version = 41;
+}
+
+hoc_status hoc_msh_write(const char *path, const hoc_msh_write_data *data,
+                         const hoc_msh_options *options) {
   HOC_CHECK(path && path[0], HOC_ERR_ARGUMENT, "no output file name given");
-  HOC_CHECK(d, HOC_ERR_ARGUMENT, "no mesh given to write '%s'", path);
+  HOC_CHECK(data, HOC_ERR_ARGUMENT, "no mesh given to write '%s'", path);
+  hoc_msh_options o;
+  hoc_msh_options_default(&o);
+  if (options) o = *options;
+  HOC_CHECK(o.version == 41 || o.version == 22, HOC_ERR_ARGUMENT,
+            "MSH version %d: 41 (4.1) or 22 (2.2) expected", o.version);
+  HOC_CHECK(o.binary == 0 || o.binary == 1, HOC_ERR_ARGUMENT, "binary flag %d: 0 or 1 expected",
+            o.binary);
+  HOC_CHECK(o.parametric == 0 || o.parametric == 1, HOC_ERR_ARGUMENT,
+            "parametric flag %d: 0 or 1 expected", o.parametric);
+  HOC_CHECK(!o.parametric || !data->n_nodes || data->param, HOC_ERR_ARGUMENT,
+            "parametric coordinates asked for '%s' but not given", path);
+  hoc_msh_write_data dd = *data;
+  const hoc_msh_write_data *d = &dd;
+  if (!o.parametric) dd.param = NULL;
   HOC_CHECK(d->order >= 1, HOC_ERR_ARGUMENT, "order %d: at least 1 expected", d->order);
   HOC_CHECK(d->order <= 10, HOC_ERR_UNSUPPORTED,
             "cannot write '%s': gmsh's MSH format has no triangle of order %d (at most 10)", path,
@@ -758,14 +924,40 @@ hoc_status hoc_msh_write(const char *path, const hoc_msh_write_data *d) {
   hoc_outfile out = {0};
   wbuf w = {0};
   hoc_status status = HOC_OK;
+  /* 2.2 tags are int: every node, and every element (points included) */
+  HOC_CHECK(o.version != 22 || d->n_nodes <= (size_t)INT32_MAX, HOC_ERR_UNSUPPORTED,
+            "cannot write '%s' as MSH 2.2: %zu nodes, its int tags stop at %d (write MSH 4.1)",
+            path, d->n_nodes, INT32_MAX);
   HOC_TRY_GOTO(layout_build(&L, d), done);
+  size_t n_elems22 = L.block_start[L.ent[0].n] + d->n_lines + d->n_tris;
+  if (o.version == 22 && n_elems22 > (size_t)INT32_MAX) {
+    status = HOC_ERROR(HOC_ERR_UNSUPPORTED,
+                       "cannot write '%s' as MSH 2.2: %zu elements, its int tags stop at %d "
+                       "(write MSH 4.1)",
+                       path, n_elems22, INT32_MAX);
+    goto done;
+  }
   HOC_ALLOC_GOTO(w.buf, WBUF_SIZE, done);
   HOC_TRY_GOTO(hoc_outfile_open(&out, path), done);
   w.fp = out.fp;
-  wb_str(&w, "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n");
-  write_entities(&w, d, &L);
-  write_nodes(&w, d, &L);
-  write_elements(&w, d, &L);
+  wb_str(&w, o.version == 22 ? "$MeshFormat\n2.2 " : "$MeshFormat\n4.1 ");
+  wb_str(&w, o.binary ? "1 8\n" : "0 8\n");
+  if (o.binary) {
+    const int32_t one = 1; /* tells the reader the byte order */
+    wb_bytes(&w, &one, sizeof one);
+    wb_char(&w, '\n');
+  }
+  wb_str(&w, "$EndMeshFormat\n");
+  w.binary = o.binary;
+  w.fresh = 1;
+  if (o.version == 22) {
+    write_nodes22(&w, d, &L);
+    write_elements22(&w, d, &L);
+  } else {
+    write_entities41(&w, d, &L);
+    write_nodes41(&w, d, &L);
+    write_elements41(&w, d, &L);
+  }
   wb_flush(&w);
   if (w.err) {
     status = HOC_ERROR(HOC_ERR_IO, "cannot write '%s': %s", path, strerror(w.err));

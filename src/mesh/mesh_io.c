@@ -1,5 +1,5 @@
-/* hoc_mesh to and from files: MSH 4.1 (with CAD entities and parametric
- * coordinates) and VTU.
+/* hoc_mesh to and from files: MSH 4.1 and 2.2 (nodes classified on the CAD
+ * entities, parametric coordinates on request) and VTU.
  * SPDX-License-Identifier: GPL-2.0-or-later */
 #include "core/hash.h"
 #include "io/io.h"
@@ -21,6 +21,11 @@ static hoc_status equispaced_view(const hoc_mesh *mesh, const hoc_mesh **view, h
 }
 
 hoc_status hoc_mesh_write_msh(const hoc_mesh *mesh, const char *path) {
+  return hoc_mesh_write_msh_with(mesh, path, NULL);
+}
+
+hoc_status hoc_mesh_write_msh_with(const hoc_mesh *mesh, const char *path,
+                                   const hoc_msh_options *options) {
   HOC_CHECK(mesh && path && path[0], HOC_ERR_ARGUMENT, "no mesh or no file name");
   HOC_CHECK(mesh->order <= 10, HOC_ERR_UNSUPPORTED,
             "gmsh's MSH format has no triangle of order %d (at most 10): write a .vtu instead",
@@ -107,7 +112,7 @@ hoc_status hoc_mesh_write_msh(const hoc_mesh *mesh, const char *path) {
   d.n_lines = m->n_lines;
   d.line_nodes = m->line_conn;
   d.line_curve_tag = lcurve;
-  status = hoc_msh_write(path, &d);
+  status = hoc_msh_write(path, &d, options);
 done:
   free(ptag);
   free(pxyz);
