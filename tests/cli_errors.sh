@@ -51,6 +51,8 @@ expect 2 "a directory" -- mesh adir.step --order 3 --no-output
 expect 1 "order 0" -- mesh "$model" --order 0
 expect 1 "order 99" -- mesh "$model" --order 99
 expect 1 "order not a number" -- mesh "$model" --order three
+expect 1 "msh version 3" -- mesh "$model" --order 2 --msh-version 3
+expect 1 "msh version without value" -- mesh "$model" --order 2 --msh-version
 expect 1 "negative size" -- mesh "$model" --size -1
 expect 1 "size not a number" -- mesh "$model" --size abc
 expect 1 "size NaN" -- mesh "$model" --size nan
@@ -88,6 +90,26 @@ expect 2 "render: mesh not on this model" -- render wrongmodel.msh --model "$mod
 echo "previous" > keep.msh
 "$hocad" mesh nosuch.step --order 2 -o keep.msh >/dev/null 2>&1
 if [ "$(cat keep.msh)" = "previous" ]; then pass=$((pass + 1)); else fail=$((fail + 1)); echo "FAIL: previous output clobbered" >&2; fi
+
+# each .msh flavour written by `mesh` is read back by `quality` with the
+# same elements and q
+"$hocad" mesh "$model" --order 3 -q -o p.msh --msh-parametric --json p.json >/dev/null 2>&1
+for flavour in "--msh-version 2.2" "--msh-version 2.2 --msh-binary" "--msh-binary" ""; do
+  rm -f f.msh f.json
+  "$hocad" mesh "$model" --order 3 -q -o f.msh $flavour >/dev/null 2>&1 &&
+    "$hocad" quality "$model" f.msh -q --json f.json >/dev/null 2>&1
+  a=$(grep -o '"min": [^,]*, "max": [^,]*, "mean": [^,]*' p.json | tail -1)
+  b=$(grep -o '"min": [^,]*, "max": [^,]*, "mean": [^,]*' f.json 2>/dev/null | tail -1)
+  n=$(grep -o '"elements": [0-9]*' f.json 2>/dev/null | tail -1)
+  if [ -n "$b" ] && [ "$n" = "$(grep -o '"elements": [0-9]*' p.json | tail -1)" ] &&
+     awk -v a="$a" -v b="$b" 'BEGIN { split(a, x, /[:,] */); split(b, y, /[:,] */);
+       for (i = 2; i <= 6; i += 2) if ((x[i] - y[i])^2 > 1e-20) exit 1 }'; then
+    pass=$((pass + 1))
+  else
+    fail=$((fail + 1)); echo "FAIL: mesh -o with '$flavour' read back by quality: '$b' vs '$a'" >&2
+  fi
+done
+rm -f p.msh p.json f.msh f.json
 
 # help and version
 for args in "--help" "mesh --help" "quality --help" "optimize --help" "render --help" "--version"; do

@@ -75,6 +75,7 @@ typedef struct options {
   int threads, quiet, no_output;
   hoc_mesh_options pipe; /* what the library's pipelines take (measure: every command's) */
   hoc_picture_options picture;
+  hoc_msh_options msh; /* the .msh written */
 } options;
 
 static int parse_int(const char *opt, const char *s, int lo, int hi, int *out) {
@@ -164,6 +165,14 @@ static const char *opt_value(int argc, char **argv, int *i, const char *name, in
   return argv[++*i];
 }
 
+#define MSH_OPTIONS                                                                                \
+  "  --msh-version V      4.1 (default) or 2.2, for readers that take only 2.2\n"                  \
+  "                       (MFEM, older NekMesh and PyFR)\n"                                        \
+  "  --msh-binary         write the .msh in binary (host byte order), not ASCII\n"                 \
+  "  --msh-parametric     also write each node's parametric coordinates (t on a\n"                 \
+  "                       curve, u v on a face), as gmsh's Mesh.SaveParametric;\n"                 \
+  "                       hocad reads them back exactly, many readers refuse them\n"
+
 #define OPTIMIZE_OPTIONS                                                                           \
   "  --fix-curves         keep nodes on CAD curves fixed (the paper's choice);\n"                  \
   "                       by default they slide along their curve\n"                               \
@@ -251,7 +260,7 @@ static const char *usage_mesh =
     "                       split, N times per chain (with --linear only the\n"
     "                       splits, default 3)\n" OPTIMIZE_OPTIONS
     "  -o, --output F.msh   gmsh MSH 4.1 output (default: MODEL-NAME_pP.msh here;\n"
-    "                       orders above 10 have no MSH type: use --vtu)\n"
+    "                       orders above 10 have no MSH type: use --vtu)\n" MSH_OPTIONS
     "  --vtu F.vtu          VTK Lagrange triangles with q per element\n"
     "  --json F.json        the report as JSON\n"
     "  --png F.png          picture of the stages side by side (linear | raised |\n"
@@ -288,7 +297,7 @@ static const char *usage_optimize =
     "  --refinements N      if elements stay tangled, split them in four (their\n"
     "                       neighbours in two to four) and optimise again, at most\n"
     "                       N times in each chain (default 6; 0 keeps the input's\n"
-    "                       elements)\n"
+    "                       elements)\n" MSH_OPTIONS
     "  --vtu F.vtu          also a VTU with q per element\n"
     "  --json F.json        the report as JSON\n"
     "  --measure M          shape | oddy (default shape)\n" OPTIMIZE_OPTIONS
@@ -378,6 +387,19 @@ static int parse(int argc, char **argv, options *o, const char **pos, int max_po
       if (!parse_int("--max-iterations", v, 1, 100000, &o->pipe.max_iterations)) return 0;
     } else if (opt && (VALUE("--output") || VALUE("-o"))) {
       o->out = v;
+    } else if (opt && VALUE("--msh-version")) {
+      if (!strcmp(v, "4.1") || !strcmp(v, "4"))
+        o->msh.version = 41;
+      else if (!strcmp(v, "2.2") || !strcmp(v, "2"))
+        o->msh.version = 22;
+      else {
+        error_line("--msh-version expects 4.1 or 2.2, got '%s'", v);
+        return 0;
+      }
+    } else if (opt && !strcmp(a, "--msh-binary")) {
+      o->msh.binary = 1;
+    } else if (opt && !strcmp(a, "--msh-parametric")) {
+      o->msh.parametric = 1;
     } else if (opt && VALUE("--refinements")) {
       if (!parse_int("--refinements", v, 0, 10, &o->pipe.refinements)) return 0;
     } else if (mesh && (VALUE("--order") || VALUE("-p"))) {
@@ -520,8 +542,8 @@ static int write_outputs(const options *o, const hoc_mesh *mesh, const double *q
     progress(o, "writing %s", paths[k]);
     size_t len = strlen(paths[k]);
     int is_vtu = k || (len >= 4 && !strcasecmp(paths[k] + len - 4, ".vtu"));
-    hoc_status st =
-        is_vtu ? hoc_mesh_write_vtu(mesh, q, paths[k]) : hoc_mesh_write_msh(mesh, paths[k]);
+    hoc_status st = is_vtu ? hoc_mesh_write_vtu(mesh, q, paths[k])
+                           : hoc_mesh_write_msh_with(mesh, paths[k], &o->msh);
     if (st != HOC_OK) return fail(st, 0);
     if (!o->quiet) printf("wrote %s\n", paths[k]);
   }
@@ -572,6 +594,7 @@ static int start(int argc, char **argv, int cmd, options *o, const char **pos, i
                  const char *usage, const char *need) {
   memset(o, 0, sizeof *o);
   hoc_mesh_options_default(&o->pipe);
+  hoc_msh_options_default(&o->msh);
   o->pipe.event = on_event;
   o->pipe.event_user = o;
   int n, pr = parse(argc, argv, o, pos, n_pos, &n, cmd);

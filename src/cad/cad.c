@@ -361,6 +361,10 @@ hoc_status hoc_cad_face_invert(const hoc_model *m, int face, const double xyz[3]
         continue;
       }
       double s0 = (cc * g0 - b * g1) / det, s1 = (aa * g1 - b * g0) / det;
+      /* a step of more than half a period in a closed direction goes nowhere
+       * new, and a huge one loses the parameter's precision when wrapped */
+      if (f->period[0] > 0 && fabs(s0) > 0.5 * f->period[0]) s0 = copysign(0.5 * f->period[0], s0);
+      if (f->period[1] > 0 && fabs(s1) > 0.5 * f->period[1]) s1 = copysign(0.5 * f->period[1], s1);
       double trial[2] = {clamp_param(uv[0] + s0, f->lo[0], f->hi[0], f->period[0]),
                          clamp_param(uv[1] + s1, f->lo[1], f->hi[1], f->period[1])};
       double xt[3], dut[3], dvt[3];

@@ -134,7 +134,7 @@ static hoc_status locate_on_face(const hoc_model *model, int f, const double *x,
 /* Parameters of nodes the source gave none: curve nodes along lines and by
  * projection; face nodes from neighbours inside their elements. */
 static hoc_status recover_params(hoc_mesh *m, const hoc_mesh_source *src,
-                                 unsigned char *known, double tol) {
+                                 unsigned char *known) {
   const hoc_model *model = m->model;
   int p = m->order, np = m->np;
   /* curve nodes: guesses along the lines, repeated until no progress */
@@ -160,7 +160,10 @@ static hoc_status recover_params(hoc_mesh *m, const hoc_mesh_source *src,
         if (m->dim[i] != HOC_ON_CURVE || known[i] || m->entity[i] != c) continue;
         double t = guess, d;
         HOC_TRY(hoc_cad_curve_invert(model, c, src->xyz + 3 * i, &t, &d));
-        if (d <= tol) {
+        /* only a converged Newton: one stuck (a start where the curve's
+         * derivative vanishes, a local minimum) leaves the node to another
+         * guess or to the projection below */
+        if (d <= 1e-9 * model->diagonal) {
           m->param[2 * i] = t;
           known[i] = 1;
           progress = 1;
@@ -174,9 +177,11 @@ static hoc_status recover_params(hoc_mesh *m, const hoc_mesh_source *src,
     double t, d;
     HOC_TRY(model->ops->curve_project(model->ctx, &model->curves[c], 1, src->xyz + 3 * i, &t));
     HOC_TRY(hoc_cad_curve_invert(model, c, src->xyz + 3 * i, &t, &d));
-    HOC_CHECK(d <= tol, HOC_ERR_MISMATCH,
-              "node %zu is %.3g away from curve %d: the mesh does not match this model",
-              node_label(src, i), d, model->curves[c].tag);
+    /* how far is judged once every node is placed (hoc_mesh_assemble), with
+     * the model's tolerance in the message */
+    HOC_CHECK(isfinite(d), HOC_ERR_MISMATCH,
+              "node %zu cannot be located on curve %d: the mesh does not match this model",
+              node_label(src, i), model->curves[c].tag);
     m->param[2 * i] = t;
     known[i] = 1;
   }
@@ -223,11 +228,11 @@ static hoc_status recover_params(hoc_mesh *m, const hoc_mesh_source *src,
       int f = m->entity[i];
       double uv[2] = {0, 0}, d;
       HOC_TRY_GOTO(locate_on_face(model, f, src->xyz + 3 * i, uv, &d), done);
-      if (!(d <= tol)) {
+      if (!isfinite(d)) { /* how far is judged once every node is placed */
         status = HOC_ERROR(HOC_ERR_MISMATCH,
-                           "node %zu is %.3g away from face %d: the mesh does not match this "
+                           "node %zu cannot be located on face %d: the mesh does not match this "
                            "model",
-                           node_label(src, i), d, model->faces[f].tag);
+                           node_label(src, i), model->faces[f].tag);
         goto done;
       }
       hoc_cad_face_wrap(&model->faces[f], uv);
@@ -247,15 +252,20 @@ static hoc_status recover_params(hoc_mesh *m, const hoc_mesh_source *src,
     for (int k = 0; k < np; ++k) {
       size_t i = cn[k];
       if (m->dim[i] != HOC_ON_FACE || known[i]) continue;
-      /* Newton from each located node of the element in turn */
-      double uv[2] = {0, 0}, d = INFINITY;
-      for (int g = 0; g < np && !(d <= tol); ++g) {
+      /* Newton from each located node of the element in turn, until one
+       * converges to the node (a start may end in a local minimum, e.g. on
+       * the domain's edge); the closest result otherwise */
+      double uv[2] = {0, 0}, d = INFINITY, found = 1e-9 * model->diagonal;
+      for (int g = 0; g < np && !(d <= found); ++g) {
         size_t j = cn[g];
         if (m->dim[j] != HOC_ON_FACE || !known[j] || m->entity[j] != f) continue;
-        memcpy(uv, m->param + 2 * j, sizeof uv);
-        HOC_TRY_GOTO(hoc_cad_face_invert(model, f, src->xyz + 3 * i, uv, &d), done);
+        double t[2] = {m->param[2 * j], m->param[2 * j + 1]}, dt;
+        HOC_TRY_GOTO(hoc_cad_face_invert(model, f, src->xyz + 3 * i, t, &dt), done);
+        if (dt < d) d = dt, uv[0] = t[0], uv[1] = t[1];
       }
-      if (!(d <= tol)) continue; /* another element may bring a better guess */
+      /* not converged: another element may bring a better guess, else the
+       * node is projected as a seed */
+      if (!(d <= found)) continue;
       hoc_cad_face_wrap(&model->faces[f], uv);
       memcpy(m->param + 2 * i, uv, sizeof uv);
       known[i] = 1;
@@ -788,7 +798,7 @@ hoc_status hoc_mesh_assemble(hoc_model *model, const hoc_mesh_source *src, doubl
   for (size_t i = 0; i < src->n_nodes; ++i) unknown += !known[i];
   if (unknown) {
     HOC_CHECK(src->xyz, HOC_ERR_ARGUMENT, "nodes without parameters need positions");
-    HOC_TRY_GOTO(recover_params(m, src, known, tol), fail);
+    HOC_TRY_GOTO(recover_params(m, src, known), fail);
   }
   /* positions from parameters: every node exactly on the CAD */
   if (src->xyz) {
