@@ -55,10 +55,11 @@
 #define HOC_OPT_POOR_Q_SHARE 0.5
 
 /* A moved block wakes the nodes around it if its gain is at least this
- * many times the sleeping threshold: every move while some element is
- * tangled (untangling makes room by moving nodes further out), only
- * significant ones while smoothing (small ones would spread waves of
- * smaller ones through the whole mesh). */
+ * many times the sleeping threshold: every move of a block within
+ * HOC_OPT_NEAR_RINGS of a tangled element (untangling makes room by moving
+ * nodes further out), elsewhere only significant ones (small ones spread
+ * waves of smaller ones through the whole mesh: with one fold left, a wave
+ * that reaches every node each sweep). */
 #define HOC_OPT_WAKE_UNTANGLING 1
 #define HOC_OPT_WAKE_SMOOTHING 10
 
@@ -133,6 +134,14 @@
 #define HOC_OPT_MU_GROWTH 100
 #define HOC_OPT_MU_LAST 1e6
 #define HOC_OPT_DIAG_FLOOR 1e-12
+
+/* Memory ----------------------------------------------------------------- */
+
+/* Bytes of the pool of element frames (hoc_opt_frames: 9 numbers per
+ * sample point, 43 KB an element at order 10, 2.5 KB at order 3): the
+ * elements beyond it, in element order, are evaluated from their nodes
+ * every time, at the cost of the frames (p^4 a visit instead of p^2). */
+#define HOC_OPT_FRAME_POOL_BYTES ((size_t)768 << 20)
 
 /* Polish ----------------------------------------------------------------- */
 
