@@ -160,7 +160,7 @@ static hoc_status sweep(run *r, size_t *moved) {
   *moved = 0;
   int local = o->cfg.exact && r->tangled;
   if (r->tangled) hoc_opt_mark_near(o);
-  else if (o->cfg.local) hoc_opt_wake_all(o); /* the nodes left awake elsewhere */
+  if (!local && o->cfg.local) hoc_opt_wake_all(o); /* the nodes left awake elsewhere */
   o->cfg.local = local;
   /* nodes near tangled elements and nodes of poor elements (those that set
    * the mesh's worst quality) never sleep */

@@ -205,11 +205,15 @@ static int block_trial(hoc_opt *o, size_t b, hoc_opt_scratch *s, double fmax, do
 }
 
 /* How many times the sleeping threshold a move of block b must gain to
- * wake the nodes around it: near a fold while untangling, every move
- * (untangling makes room by moving nodes further out); elsewhere only
- * significant ones (small ones would spread waves of smaller ones through
- * the whole mesh, a wave per fold left). */
+ * wake the nodes around it: any move of a block that touches a tangled
+ * element or one of its region (there every change reshapes the fold);
+ * while untangling, every move near a fold (untangling makes room by
+ * moving nodes further out); elsewhere only significant ones (small ones
+ * would spread waves of smaller ones through the whole mesh, a wave per
+ * fold left). */
 static double wake_factor(const hoc_opt *o, size_t b) {
+  for (size_t a = o->B->be_start[b]; a < o->B->be_start[b + 1]; ++a)
+    if (o->el.region[o->B->be_elem[a]] || !o->el.valid[o->B->be_elem[a]]) return 0;
   if (o->cfg.untangling)
     for (size_t a = o->B->bn_start[b]; a < o->B->bn_start[b + 1]; ++a)
       if (o->node.near[o->B->bn_node[a]]) return HOC_OPT_WAKE_UNTANGLING;

@@ -408,13 +408,12 @@ static double residual_chunk(const hoc_quality_tables *t, hoc_measure measure, d
     r[q] = sw * (eta[j] - 1);
     if (!J) continue;
     const double *G = t->G + 2 * (size_t)q * np;
-    double g1[3] = {sw * g[0][j], sw * g[1][j], sw * g[2][j]},
-           g2[3] = {sw * g[3][j], sw * g[4][j], sw * g[5][j]};
+    double g1[3] = {g[0][j], g[1][j], g[2][j]}, g2[3] = {g[3][j], g[4][j], g[5][j]};
     double *Jq = J + 3 * (size_t)q * np;
     for (int a = 0; a < n_need; ++a) {
       int i = need_list[a];
       double gx = G[2 * i], gy = G[2 * i + 1];
-      for (int k = 0; k < 3; ++k) Jq[3 * i + k] = g1[k] * gx + g2[k] * gy;
+      for (int k = 0; k < 3; ++k) Jq[3 * i + k] = sw * (g1[k] * gx + g2[k] * gy);
     }
   }
   return smin;
