@@ -252,8 +252,10 @@ static hoc_status mesh_model_run(const hoc_run *run, hoc_model *model, model_mes
       /* the raised mesh before optimisation, for pictures */
       if (o->keep_stages)
         HOC_TRY_GOTO(hoc_mesh_elevate(m->lin, o->order, o->nodeset, &m->raised), done);
-      if (o->order >= HOC_PIPELINE_COARSE_FROM)
+      if (o->order >= HOC_PIPELINE_COARSE_FROM) {
         HOC_TRY_GOTO(coarse_start(run, r, m->lin, &m->ho), done);
+        *final = m->ho;
+      }
       HOC_TRY_GOTO(hoc_repair_optimize(run, r, "optimized", m->ho, NULL), done);
     }
     /* elements left tangled: their faces meshed again finer, from the
