@@ -51,7 +51,7 @@ hoc_status hoc_opt_frames_setup(hoc_opt *o) {
   size_t per = 9 * (size_t)o->fc.npts * sizeof(double);
   size_t want = 0;
   for (size_t e = 0; e < ne; ++e) want += !o->adj.touched || o->adj.touched[e];
-  o->fc.cap = HOC_OPT_FRAME_POOL_BYTES / per;
+  o->fc.cap = o->m->order >= HOC_OPT_FRAME_MIN_ORDER ? HOC_OPT_FRAME_POOL_BYTES / per : 0;
   if (o->fc.cap > want) o->fc.cap = want;
   HOC_ALLOC(o->fc.slot, ne + 1);
   if (o->fc.cap) {
