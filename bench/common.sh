@@ -64,6 +64,6 @@ bench_header() {
   done
   printf '`\n\n'
   printf 'Machine: %s cores (%s), %s, load %s at the start; hocad %s (%s, %s); %s.\n\n' \
-    "$(nproc)" "${cpu:-unknown CPU}" "$mem" "$(cut -d' ' -f1-3 /proc/loadavg)" "$rev" \
+    "$(env -u OMP_NUM_THREADS -u OMP_THREAD_LIMIT nproc)" "${cpu:-unknown CPU}" "$mem" "$(cut -d' ' -f1-3 /proc/loadavg)" "$rev" \
     "$("$hocad" --version 2>/dev/null | head -n 1)" "$hocad" "$(date -u '+%Y-%m-%d %H:%M UTC')"
 }
