@@ -70,10 +70,16 @@ done
 export OMP_WAIT_POLICY=passive OMP_NUM_THREADS=$threads
 runs=0 met=0 failures=()
 
+# label MODEL: its name in the tables, relative to the corpus directory
+# (hard/x.igs), else the file name
+label() {
+  case $1 in "$cad"/*) echo "${1#"$cad"/}" ;; *) basename "$1" ;; esac
+}
+
 # one_run MODEL ORDER: a row; sets $wall (seconds) of the run
 one_run() {
   local m=$1 p=$2 name rc out=() cadf=()
-  name=${m#"$cad"/}
+  name=$(label "$m")
   rm -f "$work"/r.json "$work"/m.msh "$work"/q.txt "$work"/why
   [ $cad_check = 1 ] && out=(-o "$work/m.msh") || out=(--no-output)
   /usr/bin/time -f "%e %M" -o "$work/time" timeout -k 10 "$tmo" "$hocad" mesh "$m" --order "$p" \
@@ -111,7 +117,7 @@ fi
 if [ ${#hard[@]} -gt 0 ]; then
   "$py" "$line" hard-header
   for m in "${hard[@]}"; do
-    name=${m#"$cad"/}
+    name=$(label "$m")
     rm -f "$work"/why
     timeout -k 10 "$tmo" "$hocad" mesh "$m" --order 3 --threads "$threads" --no-output -q \
       > /dev/null 2> "$work/err"
