@@ -16,7 +16,7 @@
 #include <time.h>
 #include <unistd.h>
 
-/* Exit codes (documented in README.md and --help). */
+/* Exit codes (documented in README.md, docs/cli.md and --help). */
 enum {
   EXIT_OK = 0,
   EXIT_USAGE = 1,    /* bad command line */
