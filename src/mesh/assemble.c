@@ -188,7 +188,7 @@ static hoc_status recover_params(hoc_mesh *m, const hoc_mesh_source *src,
   /* face nodes: breadth-first through the elements; a node is located from
    * the parameters of a located node of the same element (an unwrapped
    * guess, so Newton converges in a few steps); where no element links a
-   * located node to the rest, one node is projected (slow) as a seed */
+   * located node to the rest, one node is projected (slow) as a start */
   size_t missing = 0;
   for (size_t i = 0; i < m->n_nodes; ++i) missing += m->dim[i] == HOC_ON_FACE && !known[i];
   if (!missing) return HOC_OK;
@@ -220,7 +220,7 @@ static hoc_status recover_params(hoc_mesh *m, const hoc_mesh_source *src,
         queue[tail++] = e;
       }
     }
-  size_t scan = 0; /* next node to consider as a projection seed */
+  size_t scan = 0; /* next node to consider to project as a start */
   while (missing) {
     if (head == tail) {
       while (!(m->dim[scan] == HOC_ON_FACE && !known[scan])) ++scan;
@@ -264,7 +264,7 @@ static hoc_status recover_params(hoc_mesh *m, const hoc_mesh_source *src,
         if (dt < d) d = dt, uv[0] = t[0], uv[1] = t[1];
       }
       /* not converged: another element may bring a better guess, else the
-       * node is projected as a seed */
+       * node is projected as a start */
       if (!(d <= found)) continue;
       hoc_cad_face_wrap(&model->faces[f], uv);
       memcpy(m->param + 2 * i, uv, sizeof uv);
