@@ -43,3 +43,27 @@ jtop() { grep -o "\"$2\": [-0-9.e+]*" "$1" | head -1 | cut -d' ' -f2; }
 # rss_mb FILE: peak RSS in MB from /usr/bin/time -f %M (its last line: a
 # failed command's status line comes first)
 rss_mb() { tail -n 1 "$1" | awk '{print $1 / 1024}'; }
+
+# bench_header ARGS...: markdown lines to paste above a table: the command
+# that made it (the calling script with ARGS), the machine (cores, CPU,
+# memory, load when it started) and the hocad that ran (the repository's
+# git describe, the binary's --version); needs $hocad (use_hocad) set.
+bench_header() {
+  local script cpu mem rev
+  script=${0#"$here"/}
+  cpu=$(awk -F': *' '/^model name/ { print $2; exit }' /proc/cpuinfo)
+  mem=$(awk '/^MemTotal/ { printf "%.0f GiB", $2 / 1048576 }' /proc/meminfo)
+  rev=$(git -C "$here" describe --always --tags --dirty 2>/dev/null || echo "not a git checkout")
+  printf 'Command: `bash %s' "$script"
+  local a
+  for a in "$@"; do
+    case $a in
+      *[!-A-Za-z0-9_./=,:+]*) printf " '%s'" "$a" ;;
+      *) printf ' %s' "$a" ;;
+    esac
+  done
+  printf '`\n\n'
+  printf 'Machine: %s cores (%s), %s, load %s at the start; hocad %s (%s, %s); %s.\n\n' \
+    "$(env -u OMP_NUM_THREADS -u OMP_THREAD_LIMIT nproc)" "${cpu:-unknown CPU}" "$mem" "$(cut -d' ' -f1-3 /proc/loadavg)" "$rev" \
+    "$("$hocad" --version 2>/dev/null | head -n 1)" "$hocad" "$(date -u '+%Y-%m-%d %H:%M UTC')"
+}

@@ -4,8 +4,6 @@
 #include "hocad.h"
 #include "core/cli_support.h"
 
-#include <errno.h>
-#include <math.h>
 #include <omp.h>
 #include <signal.h>
 #include <stdarg.h>
@@ -16,7 +14,7 @@
 #include <time.h>
 #include <unistd.h>
 
-/* Exit codes (documented in README.md and --help). */
+/* Exit codes (documented in README.md, docs/cli.md and --help). */
 enum {
   EXIT_OK = 0,
   EXIT_USAGE = 1,    /* bad command line */
@@ -78,76 +76,10 @@ typedef struct options {
   hoc_msh_options msh; /* the .msh written */
 } options;
 
-static int parse_int(const char *opt, const char *s, int lo, int hi, int *out) {
-  char *end;
-  errno = 0;
-  long v = s ? strtol(s, &end, 10) : 0;
-  if (!s || !*s || *end || errno || v < lo || v > hi) {
-    error_line("%s expects an integer in %d..%d, got '%s'", opt, lo, hi, s ? s : "");
-    return 0;
-  }
-  *out = (int)v;
-  return 1;
-}
-
-static int parse_positive(const char *opt, const char *s, double *out) {
-  char *end;
-  errno = 0;
-  double v = s ? strtod(s, &end) : 0;
-  if (!s || !*s || *end || errno || !isfinite(v) || !(v > 0)) {
-    error_line("%s expects a positive number, got '%s'", opt, s ? s : "");
-    return 0;
-  }
-  *out = v;
-  return 1;
-}
-
-/* --view iso|front|top|side|back|bottom|x,y,z: direction towards the eye. */
-static int parse_view(const char *s, double view[3]) {
-  static const struct {
-    const char *name;
-    double d[3];
-  } named[] = {{"iso", {1, 1, 1}},   {"front", {0, -1, 0}},  {"back", {0, 1, 0}},
-               {"top", {0, 0, 1}},   {"bottom", {0, 0, -1}}, {"side", {1, 0, 0}},
-               {"left", {-1, 0, 0}}, {"right", {1, 0, 0}}};
-  for (size_t k = 0; k < sizeof named / sizeof *named; ++k)
-    if (!strcmp(s, named[k].name)) {
-      memcpy(view, named[k].d, sizeof named[k].d);
-      return 1;
-    }
-  char *end;
-  const char *c = s;
-  for (int d = 0; d < 3; ++d) {
-    errno = 0;
-    view[d] = strtod(c, &end);
-    if (end == c || errno || !isfinite(view[d]) || *end != (d < 2 ? ',' : '\0')) goto bad;
-    c = end + 1;
-  }
-  if (view[0] * view[0] + view[1] * view[1] + view[2] * view[2] > 0) return 1;
-bad:
-  error_line("--view expects iso, front, back, top, bottom, side, left, right or x,y,z (not all "
-             "zero), got '%s'",
-             s);
-  return 0;
-}
-
-/* --size WxH of a picture, 64..16384 pixels a side. */
-static int parse_picture_size(const char *opt, const char *s, hoc_picture_options *p) {
-  char *end;
-  errno = 0;
-  long w = strtol(s, &end, 10), h = 0;
-  if (!errno && end != s && (*end == 'x' || *end == 'X')) {
-    const char *c = end + 1;
-    h = strtol(c, &end, 10);
-    if (end == c) h = 0;
-  }
-  if (errno || *end || w < 64 || w > 16384 || h < 64 || h > 16384) {
-    error_line("%s expects WIDTHxHEIGHT in pixels, each 64..16384, got '%s'", opt, s);
-    return 0;
-  }
-  p->width = (int)w;
-  p->height = (int)h;
-  return 1;
+/* A parser's verdict (core/cli_support.h): 1, or 0 after printing its error. */
+static int parsed(hoc_status st) {
+  if (st != HOC_OK) error_line("%s", hoc_last_error());
+  return st == HOC_OK;
 }
 
 /* --name value or --name=value: returns the value or NULL if this argument
@@ -343,16 +275,9 @@ static int parse(int argc, char **argv, options *o, const char **pos, int max_po
     if (!strcmp(a, "-q") || !strcmp(a, "--quiet")) {
       o->quiet = 1;
     } else if (VALUE("--measure")) {
-      if (!strcmp(v, "shape"))
-        o->pipe.measure = HOC_MEASURE_SHAPE;
-      else if (!strcmp(v, "oddy"))
-        o->pipe.measure = HOC_MEASURE_ODDY;
-      else {
-        error_line("--measure expects shape or oddy, got '%s'", v);
-        return 0;
-      }
+      if (!parsed(hoc_cli_parse_measure("--measure", v, &o->pipe.measure))) return 0;
     } else if (VALUE("--threads")) {
-      if (!parse_int("--threads", v, 1, 1024, &o->threads)) return 0;
+      if (!parsed(hoc_cli_parse_int("--threads", v, 1, 1024, &o->threads))) return 0;
     } else if (!render && VALUE("--json")) {
       o->json = v;
     } else if (!render && VALUE("--vtu")) {
@@ -362,15 +287,15 @@ static int parse(int argc, char **argv, options *o, const char **pos, int max_po
     } else if (render && VALUE("--model")) {
       o->model = v;
     } else if (render && VALUE("--size")) {
-      if (!parse_picture_size("--size", v, &o->picture)) return 0;
+      if (!parsed(hoc_cli_parse_picture_size("--size", v, &o->picture))) return 0;
     } else if (mesh && VALUE("--png-size")) {
-      if (!parse_picture_size("--png-size", v, &o->picture)) return 0;
+      if (!parsed(hoc_cli_parse_picture_size("--png-size", v, &o->picture))) return 0;
     } else if (mesh && VALUE("--png")) {
       o->png = v;
     } else if (picture && VALUE("--histogram")) {
       o->histogram = v;
     } else if (picture && VALUE("--view")) {
-      if (!parse_view(v, o->picture.view)) return 0;
+      if (!parsed(hoc_cli_parse_view("--view", v, o->picture.view))) return 0;
     } else if (picture && !strcmp(a, "--zoom-worst")) {
       o->picture.zoom_worst = 1;
     } else if (picture && !strcmp(a, "--no-edges")) {
@@ -384,47 +309,32 @@ static int parse(int argc, char **argv, options *o, const char **pos, int max_po
     } else if (opt && !strcmp(a, "--check-gradient")) {
       o->pipe.check_gradient = 1;
     } else if (opt && VALUE("--max-iterations")) {
-      if (!parse_int("--max-iterations", v, 1, 100000, &o->pipe.max_iterations)) return 0;
+      if (!parsed(hoc_cli_parse_int("--max-iterations", v, 1, 100000, &o->pipe.max_iterations)))
+        return 0;
     } else if (opt && (VALUE("--output") || VALUE("-o"))) {
       o->out = v;
     } else if (opt && VALUE("--msh-version")) {
-      if (!strcmp(v, "4.1") || !strcmp(v, "4"))
-        o->msh.version = 41;
-      else if (!strcmp(v, "2.2") || !strcmp(v, "2"))
-        o->msh.version = 22;
-      else {
-        error_line("--msh-version expects 4.1 or 2.2, got '%s'", v);
-        return 0;
-      }
+      if (!parsed(hoc_cli_parse_msh_version("--msh-version", v, &o->msh.version))) return 0;
     } else if (opt && !strcmp(a, "--msh-binary")) {
       o->msh.binary = 1;
     } else if (opt && !strcmp(a, "--msh-parametric")) {
       o->msh.parametric = 1;
     } else if (opt && VALUE("--refinements")) {
-      if (!parse_int("--refinements", v, 0, 10, &o->pipe.refinements)) return 0;
+      if (!parsed(hoc_cli_parse_int("--refinements", v, 0, 10, &o->pipe.refinements))) return 0;
     } else if (mesh && (VALUE("--order") || VALUE("-p"))) {
-      if (!parse_int("--order", v, 1, HOC_MAX_ORDER, &o->pipe.order)) return 0;
+      if (!parsed(hoc_cli_parse_int("--order", v, 1, HOC_MAX_ORDER, &o->pipe.order))) return 0;
     } else if (mesh && VALUE("--size-min")) {
-      if (!parse_positive("--size-min", v, &o->pipe.size_min)) return 0;
+      if (!parsed(hoc_cli_parse_positive("--size-min", v, &o->pipe.size_min))) return 0;
     } else if (mesh && VALUE("--size")) {
-      if (!parse_positive("--size", v, &o->pipe.size)) return 0;
+      if (!parsed(hoc_cli_parse_positive("--size", v, &o->pipe.size))) return 0;
     } else if (mesh && VALUE("--curvature")) {
-      if (!parse_positive("--curvature", v, &o->pipe.curvature)) return 0;
+      if (!parsed(hoc_cli_parse_positive("--curvature", v, &o->pipe.curvature))) return 0;
       if (o->pipe.curvature > 1000) {
         error_line("--curvature expects at most 1000 elements per 2*pi, got '%s'", v);
         return 0;
       }
     } else if (mesh && VALUE("--nodes")) {
-      if (!strcmp(v, "equispaced"))
-        o->pipe.nodeset = HOC_NODES_EQUISPACED;
-      else if (!strcmp(v, "fekete"))
-        o->pipe.nodeset = HOC_NODES_FEKETE;
-      else if (!strcmp(v, "warp-blend"))
-        o->pipe.nodeset = HOC_NODES_WARP_BLEND;
-      else {
-        error_line("--nodes expects equispaced, fekete or warp-blend, got '%s'", v);
-        return 0;
-      }
+      if (!parsed(hoc_cli_parse_nodeset("--nodes", v, &o->pipe.nodeset))) return 0;
     } else if (mesh && VALUE("--linear")) {
       o->linear = v;
     } else if (mesh && !strcmp(a, "--no-optimize")) {
@@ -620,16 +530,6 @@ static int open_inputs(const options *o, hoc_model **model, hoc_mesh **mesh) {
   return st == HOC_OK ? EXIT_OK : fail(st, 1);
 }
 
-/* Default output name: the model's base name without extension, _pP.msh
- * (.vtu above order 10), in the current directory. */
-static void default_output(const char *model, int order, char *buf, size_t size) {
-  const char *base = strrchr(model, '/');
-  base = base ? base + 1 : model;
-  const char *dot = strrchr(base, '.');
-  int len = dot ? (int)(dot - base) : (int)strlen(base);
-  snprintf(buf, size, "%.*s_p%d.%s", len, base, order, order <= 10 ? "msh" : "vtu");
-}
-
 static int cmd_mesh(int argc, char **argv) {
   options o;
   const char *pos[1];
@@ -644,7 +544,7 @@ static int cmd_mesh(int argc, char **argv) {
   char out_buf[1024];
   const char *out = o.out;
   if (!out && !o.no_output && !o.vtu) {
-    default_output(o.model, mo->order, out_buf, sizeof out_buf);
+    hoc_cli_default_output(o.model, mo->order, out_buf, sizeof out_buf);
     out = out_buf;
   }
   if (o.no_output) out = NULL;
@@ -739,13 +639,10 @@ static int cmd_mesh_file(int argc, char **argv, int cmd) {
   if (!o.quiet && optimize) {
     printf("mesh %s on %s: %zu nodes\n", o.mesh_in, o.model, hoc_mesh_num_nodes(m));
   } else if (!o.quiet) {
-    double off = 0, bb[6];
-    hoc_mesh_max_cad_distance(m, &off);
-    hoc_model_bbox(model, bb);
-    double diag = sqrt((bb[3] - bb[0]) * (bb[3] - bb[0]) + (bb[4] - bb[1]) * (bb[4] - bb[1]) +
-                       (bb[5] - bb[2]) * (bb[5] - bb[2]));
+    double off, rel;
+    (void)hoc_cli_cad_offset(m, model, &off, &rel);
     printf("mesh %s on %s: %zu nodes, farthest node %.3g from the CAD (%.2g of the model's size)\n",
-           o.mesh_in, o.model, hoc_mesh_num_nodes(m), off, diag > 0 ? off / diag : 0);
+           o.mesh_in, o.model, hoc_mesh_num_nodes(m), off, rel);
   }
   if (!o.quiet) print_table(r);
   if ((code = write_outputs(&o, m, hoc_report_quality(r), o.out))) goto done;

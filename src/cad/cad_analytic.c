@@ -1,5 +1,6 @@
 /* Analytic CAD models with exact evaluation, for tests: a plane square, a
- * sphere (seam + two poles), a cylinder (seam) and a torus (two seams).
+ * sphere (seam + two poles), a cylinder (seam), a torus (two seams) and a
+ * cone (seam + a pole at its apex, where the surface has no tangent plane).
  * Each has one face (tag 1) and the curves and vertices of its boundary.
  * SPDX-License-Identifier: GPL-2.0-or-later */
 #include "cad/cad.h"
@@ -41,6 +42,12 @@ static void face_point(const analytic *s, double u, double v, double *x, double 
     U[0] = -a * su, U[1] = a * cu, U[2] = 0;
     V[0] = 0, V[1] = 0, V[2] = 1;
     break;
+  case HOC_ANALYTIC_CONE: {
+    double k = a / b; /* radius over height */
+    X[0] = k * v * cu, X[1] = k * v * su, X[2] = v;
+    U[0] = -k * v * su, U[1] = k * v * cu, U[2] = 0;
+    V[0] = k * cu, V[1] = k * su, V[2] = 1;
+  } break;
   case HOC_ANALYTIC_TORUS:
   default: {
     double r = a + b * cv;
@@ -108,6 +115,10 @@ static void face_inverse(const analytic *s, const double *x, double *uv) {
     break;
   case HOC_ANALYTIC_CYLINDER:
     uv[0] = u;
+    uv[1] = x[2];
+    break;
+  case HOC_ANALYTIC_CONE:
+    uv[0] = rho > 0 ? u : 0;
     uv[1] = x[2];
     break;
   case HOC_ANALYTIC_TORUS:
@@ -184,6 +195,7 @@ hoc_status hoc_cad_create_analytic(hoc_analytic_kind kind, double a, double b,
   case HOC_ANALYTIC_PLANE: nc = 4, nv = 4; break;
   case HOC_ANALYTIC_SPHERE: nc = 3, nv = 2; break;
   case HOC_ANALYTIC_CYLINDER: nc = 3, nv = 2; break;
+  case HOC_ANALYTIC_CONE: nc = 3, nv = 2; break;
   case HOC_ANALYTIC_TORUS: nc = 2, nv = 1; break;
   default: return HOC_ERROR(HOC_ERR_ARGUMENT, "unknown analytic surface %d", (int)kind);
   }
@@ -234,6 +246,16 @@ hoc_status hoc_cad_create_analytic(hoc_analytic_kind kind, double a, double b,
     set_curve(m, 0, 0, b, 0, 1, s, 0, 0, 0, 1);      /* seam u = 0 */
     set_curve(m, 1, 0, TWO_PI, 0, 0, s, 0, 0, 1, 0); /* bottom circle */
     set_curve(m, 2, 0, TWO_PI, 1, 1, s, 0, b, 1, 0); /* top circle */
+    face_point(s, 0, 0, m->vertices[0].xyz, NULL, NULL);
+    face_point(s, 0, b, m->vertices[1].xyz, NULL, NULL);
+    m->bbox[0] = m->bbox[1] = -a, m->bbox[3] = m->bbox[4] = a, m->bbox[2] = 0, m->bbox[5] = b;
+    break;
+  case HOC_ANALYTIC_CONE:
+    snprintf(f->type, sizeof f->type, "Cone");
+    f->lo[0] = 0, f->hi[0] = TWO_PI, f->lo[1] = 0, f->hi[1] = b;
+    set_curve(m, 0, 0, b, 0, 1, s, 0, 0, 0, 1);      /* seam u = 0, apex to base */
+    set_curve(m, 1, 0, TWO_PI, 0, 0, s, 0, 0, 1, 0); /* apex (degenerate) */
+    set_curve(m, 2, 0, TWO_PI, 1, 1, s, 0, b, 1, 0); /* base circle */
     face_point(s, 0, 0, m->vertices[0].xyz, NULL, NULL);
     face_point(s, 0, b, m->vertices[1].xyz, NULL, NULL);
     m->bbox[0] = m->bbox[1] = -a, m->bbox[3] = m->bbox[4] = a, m->bbox[2] = 0, m->bbox[5] = b;

@@ -25,4 +25,41 @@ hoc_status hoc_picture_msh_file(const char *msh_path, hoc_measure measure, const
                                 const char *histogram_path, const hoc_picture_options *options,
                                 hoc_quality_stats *stats);
 
+/* Option values of the command line, checked: HOC_OK, or HOC_ERR_ARGUMENT
+ * with the one-line message "OPT expects ..., got 'S'" (S may be NULL: a
+ * missing value). ----------------------------------------------------------- */
+
+/** An integer in lo..hi. */
+hoc_status hoc_cli_parse_int(const char *opt, const char *s, int lo, int hi, int *out);
+
+/** A finite number above 0. */
+hoc_status hoc_cli_parse_positive(const char *opt, const char *s, double *out);
+
+/** A direction towards the eye: iso, front, back, top, bottom, side, left,
+ *  right, or x,y,z (not all zero). */
+hoc_status hoc_cli_parse_view(const char *opt, const char *s, double view[3]);
+
+/** WIDTHxHEIGHT of a picture in pixels, 64..16384 a side, into options. */
+hoc_status hoc_cli_parse_picture_size(const char *opt, const char *s, hoc_picture_options *options);
+
+/** shape or oddy. */
+hoc_status hoc_cli_parse_measure(const char *opt, const char *s, hoc_measure *out);
+
+/** equispaced, fekete or warp-blend. */
+hoc_status hoc_cli_parse_nodeset(const char *opt, const char *s, hoc_nodeset *out);
+
+/** 4.1 (or 4) or 2.2 (or 2), as hoc_msh_options.version (41 or 22). */
+hoc_status hoc_cli_parse_msh_version(const char *opt, const char *s, int *version);
+
+/** The default output of `hocad mesh`: the model's base name without its
+ *  extension, then _pP.msh (_pP.vtu above order 10, which MSH cannot
+ *  hold), in the current directory; truncated to `size`. */
+void hoc_cli_default_output(const char *model, int order, char *buf, size_t size);
+
+/** The largest distance of a node of `mesh` from its CAD entity, and that
+ *  as a share of the diagonal of the model's bounding box (0 if the box
+ *  is a point). */
+hoc_status hoc_cli_cad_offset(const hoc_mesh *mesh, const hoc_model *model, double *offset,
+                              double *relative);
+
 #endif

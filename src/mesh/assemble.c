@@ -188,7 +188,7 @@ static hoc_status recover_params(hoc_mesh *m, const hoc_mesh_source *src,
   /* face nodes: breadth-first through the elements; a node is located from
    * the parameters of a located node of the same element (an unwrapped
    * guess, so Newton converges in a few steps); where no element links a
-   * located node to the rest, one node is projected (slow) as a seed */
+   * located node to the rest, one node is projected (slow) as a start */
   size_t missing = 0;
   for (size_t i = 0; i < m->n_nodes; ++i) missing += m->dim[i] == HOC_ON_FACE && !known[i];
   if (!missing) return HOC_OK;
@@ -220,7 +220,7 @@ static hoc_status recover_params(hoc_mesh *m, const hoc_mesh_source *src,
         queue[tail++] = e;
       }
     }
-  size_t scan = 0; /* next node to consider as a projection seed */
+  size_t scan = 0; /* next node to consider to project as a start */
   while (missing) {
     if (head == tail) {
       while (!(m->dim[scan] == HOC_ON_FACE && !known[scan])) ++scan;
@@ -264,7 +264,7 @@ static hoc_status recover_params(hoc_mesh *m, const hoc_mesh_source *src,
         if (dt < d) d = dt, uv[0] = t[0], uv[1] = t[1];
       }
       /* not converged: another element may bring a better guess, else the
-       * node is projected as a seed */
+       * node is projected as a start */
       if (!(d <= found)) continue;
       hoc_cad_face_wrap(&model->faces[f], uv);
       memcpy(m->param + 2 * i, uv, sizeof uv);
@@ -504,6 +504,85 @@ done:
   free(t);
   free(uv);
   return status;
+}
+
+/* Pole slots per element ------------------------------------------------ */
+
+/* A slot at a pole of its face whose node is shared with other faces (on a
+ * CAD vertex or curve: a degenerate one, a vertex at an apex). */
+static int pole_slot(const hoc_mesh *m, size_t s) {
+  return m->slot_pole[s] && m->dim[m->slot_node[s]] != HOC_ON_FACE;
+}
+
+/* One slot per element at each pole: the first element using a pole slot
+ * keeps it, every further one gets a copy (same node, face, parameters and
+ * pole bits). At a pole phi_u x phi_v = 0 and the normal is the limit of
+ * the surface's along the direction of approach: the same from every
+ * direction where the surface is smooth there (a sphere's pole), but not
+ * at the apex of a cone or any other point where the surface has no
+ * tangent plane. Each element's slot then holds the element's own
+ * direction (per_element_pole_params), so that whatever reads normals
+ * through elem_slot (measuring, the optimiser, pictures) sees the normal
+ * of the surface on that element's side of the pole. */
+static hoc_status split_pole_slots(hoc_mesh *m) {
+  size_t n = m->n_slots, extra = 0, np = (size_t)m->np;
+  unsigned char *claimed = hoc_calloc(n + 1, 1);
+  HOC_CHECK(claimed, HOC_ERR_MEMORY, "out of memory");
+  for (size_t x = 0; x < m->n_elems * np; ++x) {
+    size_t s = m->elem_slot[x];
+    if (!pole_slot(m, s)) continue;
+    extra += claimed[s];
+    claimed[s] = 1;
+  }
+  if (!extra) {
+    free(claimed);
+    return HOC_OK;
+  }
+  size_t total = n + extra;
+  size_t *node = hoc_realloc(m->slot_node, total, sizeof *node);
+  if (node) m->slot_node = node;
+  int *face = hoc_realloc(m->slot_face, total, sizeof *face);
+  if (face) m->slot_face = face;
+  double *uv = hoc_realloc(m->slot_uv, 2 * total, sizeof *uv);
+  if (uv) m->slot_uv = uv;
+  unsigned char *pole = hoc_realloc(m->slot_pole, total, sizeof *pole);
+  if (pole) m->slot_pole = pole;
+  if (!node || !face || !uv || !pole) {
+    free(claimed);
+    return HOC_ERROR(HOC_ERR_MEMORY, "out of memory for %zu slots", total);
+  }
+  memset(claimed, 0, n);
+  for (size_t x = 0; x < m->n_elems * np; ++x) {
+    size_t s = m->elem_slot[x];
+    if (!pole_slot(m, s)) continue;
+    if (!claimed[s]) {
+      claimed[s] = 1;
+      continue;
+    }
+    size_t c = m->n_slots++;
+    node[c] = node[s];
+    face[c] = face[s];
+    uv[2 * c] = uv[2 * s];
+    uv[2 * c + 1] = uv[2 * s + 1];
+    pole[c] = pole[s];
+    m->elem_slot[x] = c;
+  }
+  free(claimed);
+  return HOC_OK;
+}
+
+/* The arbitrary coordinate of each element's pole slot: the element's own
+ * (element_params), wrapped into the face's range. */
+static void per_element_pole_params(hoc_mesh *m) {
+  size_t np = (size_t)m->np;
+  for (size_t x = 0; x < m->n_elems * np; ++x) {
+    size_t s = m->elem_slot[x];
+    if (!pole_slot(m, s)) continue;
+    double uv[2] = {m->elem_uv[2 * x], m->elem_uv[2 * x + 1]};
+    hoc_cad_face_wrap(&m->model->faces[m->slot_face[s]], uv);
+    for (int d = 0; d < 2; ++d)
+      if (m->slot_pole[s] & (1 << d)) m->slot_uv[2 * s + (size_t)d] = uv[d];
+  }
 }
 
 /* Element parameters, unwrapped around a regular node of the element; pole
@@ -842,7 +921,9 @@ hoc_status hoc_mesh_assemble(hoc_model *model, const hoc_mesh_source *src, doubl
   if (given && src->keep_xyz) memcpy(m->xyz, given, 3 * src->n_nodes * sizeof *given);
   HOC_TRY_GOTO(build_slots(m), fail);
   HOC_TRY_GOTO(slot_params(m, src, tol, src->given ? 2 * limit : INFINITY), fail);
+  HOC_TRY_GOTO(split_pole_slots(m), fail);
   element_params(m);
+  per_element_pole_params(m);
 
   if (src->n_lines) {
     m->n_lines = src->n_lines;

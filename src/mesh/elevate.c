@@ -196,7 +196,7 @@ static hoc_status cusp_grading(const hoc_mesh *in, const size_t *elem_edge, cons
  * each source element's parametric map at the new reference nodes. Nodes
  * on CAD curves are interpolated in the curve's parameter t along the edge;
  * other nodes in the face's (u,v), unwrapped per element. From a linear
- * mesh this is the seed's placement (straight in (u,v)); from a curved mesh
+ * mesh this is the paper's placement (straight in (u,v)); from a curved mesh
  * it keeps the curved geometry. */
 static hoc_status reinterpolate(const hoc_mesh *in, int p, hoc_nodeset set, hoc_mesh **out) {
   const hoc_model *model = in->model;

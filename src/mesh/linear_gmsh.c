@@ -74,8 +74,8 @@ static void growable_free(growable *g) {
  * process on some models (an uncaught exception after "Unable to recover
  * the edge"), which must end only the child. The child meshes, then sends
  * the classified mesh through a pipe as gmsh's API returns it; this
- * process reads it in the order it used to ask gmsh, so the mesh is the
- * one an in-process run makes, bit for bit.
+ * process reads it in the order an in-process run asks gmsh for it, so the
+ * mesh is the one an in-process run makes, bit for bit.
  *
  * When the child crashed, a second child finds the faces that crash gmsh
  * and meshes the others: it meshes the curves, then tries each face alone

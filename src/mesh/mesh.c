@@ -374,6 +374,25 @@ static void nudge_inside(const hoc_cad_face *f, const double *uv, double *out) {
   }
 }
 
+/* Parameters just off the pole side from a pole slot's: the coordinate at
+ * the pole moves a little toward the middle, the arbitrary one (the
+ * direction of the element the slot belongs to) stays, so that the normal
+ * there is the limit along that element's direction. Both move where both
+ * are arbitrary. */
+static void pole_inside(const hoc_cad_face *f, const double *uv, unsigned char pole,
+                        double *out) {
+  if ((pole & 3) == 3) {
+    nudge_inside(f, uv, out);
+    return;
+  }
+  for (int d = 0; d < 2; ++d) {
+    double mid = 0.5 * (f->lo[d] + f->hi[d]), range = f->hi[d] - f->lo[d];
+    out[d] = uv[d];
+    if (!(pole & (1 << d)))
+      out[d] += 1e-5 * range * (mid > uv[d] ? 1.0 : (mid < uv[d] ? -1.0 : 0.0));
+  }
+}
+
 /* Unit normal (oriented as the mesh) of face f at uv, from its derivatives
  * du, dv there; at a singular point not flagged as a pole, look just
  * inside the face. */
@@ -434,7 +453,7 @@ hoc_status hoc_mesh_slot_normals(const hoc_mesh *m, double *normal) {
       for (size_t k = 0; k < n; ++k) {
         size_t s = order[a + k];
         if (m->slot_pole[s])
-          nudge_inside(face, m->slot_uv + 2 * s, uv + 2 * k);
+          pole_inside(face, m->slot_uv + 2 * s, m->slot_pole[s], uv + 2 * k);
         else
           memcpy(uv + 2 * k, m->slot_uv + 2 * s, 2 * sizeof *uv);
       }

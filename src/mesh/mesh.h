@@ -12,7 +12,13 @@ enum { HOC_ON_VERTEX = 0, HOC_ON_CURVE = 1, HOC_ON_FACE = 2 };
 
 /* A mesh "slot" is a (node, face) pair: the node seen from one face that
  * uses it, with its parameters on that face. Face-interior nodes have one
- * slot; nodes on curves and vertices have one per face around them. */
+ * slot; nodes on curves and vertices have one per face around them, except
+ * at a pole of a face (a degenerate side, where one coordinate is
+ * arbitrary): there each element has a slot of its own, whose arbitrary
+ * coordinate is the element's (elem_uv), because the surface's normal at
+ * a pole is the limit along the direction of approach and differs from one
+ * element to the next where the surface has no tangent plane (a cone's
+ * apex). */
 
 struct hoc_mesh {
   hoc_model *model; /* borrowed */
@@ -36,7 +42,8 @@ struct hoc_mesh {
   size_t *slot_node;    /* [n_slots] */
   int *slot_face;       /* [n_slots] */
   double *slot_uv;      /* [n_slots][2] parameters of the node on the face */
-  unsigned char *slot_pole; /* [n_slots] bit 0: u is arbitrary here (phi_u = 0), bit 1: v is */
+  unsigned char *slot_pole; /* [n_slots] bit 0: u is arbitrary here (phi_u = 0), bit 1: v is;
+                               such a slot of a vertex or curve node belongs to one element */
 
   /* 1D elements on CAD curves (the curve edges of the triangles) */
   size_t n_lines;
@@ -94,7 +101,7 @@ hoc_status hoc_mesh_given_limit(hoc_model *model, double *limit);
 /** Build a mesh from a triangulation: locate nodes without parameters on
  *  their entities, reparametrise curve and vertex nodes on the faces around
  *  them (slots), unwrap each element's parameters across seams, give pole
- *  nodes a usable parameter per element, orient the faces from the
+ *  nodes a usable parameter and a slot per element, orient the faces from the
  *  elements, and recompute every node position from its parameters.
  *  `tolerance` (relative to the model's diagonal): nodes without
  *  parameters are located within it; a curve or vertex node whose
@@ -159,7 +166,8 @@ hoc_status hoc_curves_angle_at(const hoc_model *model, int vertex, const int c[2
                                const double t_in[2], double *angle);
 
 /** Unit normals at every slot (oriented by face_orient, NaN-free: at a pole
- *  the normal comes from the nearby interior of the face). normal[n_slots][3]. */
+ *  the normal is the limit along the slot's element, taken just off the
+ *  pole at the element's arbitrary coordinate). normal[n_slots][3]. */
 hoc_status hoc_mesh_slot_normals(const hoc_mesh *mesh, double *normal);
 
 /** Structured triangulation of an analytic model's single face for tests:

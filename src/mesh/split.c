@@ -3,7 +3,8 @@
  * (in two for one split edge, else in four) or by their longest edge
  * (bisected there first, then each half at its other split edge). The children's nodes are placed
  * as elevation places them, straight between their corners in the parent's (u, v) (in the curve's t
- * along curve edges); every element not split keeps its nodes. (Children that kept their parent's
+ * along curve edges; at a pole, on the meridians of the collapsed map); every element not split
+ * keeps its nodes. (Children that kept their parent's
  * curved map were measured worse: a map valid at its quadrature points and nodes can fold between
  * them, as an optimised curve edge whose t is not monotone does, and its pieces then measure
  * tangled.) SPDX-License-Identifier: GPL-2.0-or-later */
@@ -30,16 +31,28 @@ typedef struct splitter {
 } splitter;
 
 /* Element e's straight map (its corners' unwrapped (u, v)) at parent
- * reference point x (r, s), wrapped into the face's range. */
+ * reference point x (r, s), wrapped into the face's range. At a corner on
+ * a pole, the arbitrary coordinate follows the collapsed map instead (as
+ * elevation places nodes: mesh/elevate.c), whose lines from the pole are
+ * meridians: a child's edge along the parent's edge from the pole stays
+ * on the parent's meridian. */
 static void face_point(const splitter *S, size_t e, const double x[2], double uv[2]) {
   const hoc_mesh *m = S->m;
   const double *euv = m->elem_uv + 2 * e * (size_t)S->np;
+  const size_t *sl = m->elem_slot + e * (size_t)S->np;
   double w[3] = {1 - x[0] - x[1], x[0], x[1]};
   uv[0] = uv[1] = 0;
   for (int i = 0; i < 3; ++i) {
     uv[0] += w[i] * euv[2 * i];
     uv[1] += w[i] * euv[2 * i + 1];
   }
+  for (int j = 0; j < 3; ++j)
+    for (int d = 0; d < 2; ++d) {
+      if (!(m->slot_pole[sl[j]] & (1 << d))) continue;
+      int j1 = (j + 1) % 3, j2 = (j + 2) % 3;
+      double wj = w[j1] + w[j2];
+      if (wj > 0) uv[d] = (w[j1] * euv[2 * j1 + d] + w[j2] * euv[2 * j2 + d]) / wj;
+    }
   hoc_cad_face_wrap(&m->model->faces[m->elem_face[e]], uv);
 }
 

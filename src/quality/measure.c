@@ -1,5 +1,5 @@
 /* Quality of a whole mesh: CAD normals at the nodes, the element kernel in
- * parallel, and the statistics of the seed's Table 2.
+ * parallel, and the statistics of the paper's Table 2.
  * SPDX-License-Identifier: GPL-2.0-or-later */
 #include "mesh/mesh.h"
 #include "quality/quality.h"

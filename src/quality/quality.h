@@ -1,4 +1,4 @@
-/* Jacobian-based distortion of high-order surface triangles: the seed's
+/* Jacobian-based distortion of high-order surface triangles: the paper's
  * Table 1 (shape, Oddy), Definition 1 (L2 average over the ideal element)
  * and Definition 2 (surfaces, through the tangent-plane embedding T).
  * SPDX-License-Identifier: GPL-2.0-or-later
