@@ -136,7 +136,7 @@ typedef struct hoc_opt_settings {
                          phase while some element is tangled) */
   double eps;         /* regularisation scale of tangled elements (relative to their size) */
   double min_gain;    /* per node: a step that lowers f by less puts the block to sleep */
-  int untangling;     /* some element is tangled: node.near marks the nodes around them */
+  double wake_factor; /* a move must gain this many times min_gain to wake its neighbours */
 } hoc_opt_settings;
 
 /* Trial state of the blocks of a colour and of their nodes. */

@@ -159,8 +159,8 @@ static hoc_status sweep(run *r, size_t *moved) {
   hoc_mesh *mesh = r->mesh;
   *moved = 0;
   int local = o->cfg.exact && r->tangled;
-  if (r->tangled) hoc_opt_mark_near(o);
-  if (!local && o->cfg.local) hoc_opt_wake_all(o); /* the nodes left awake elsewhere */
+  if (local) hoc_opt_mark_near(o);
+  else if (o->cfg.local) hoc_opt_wake_all(o); /* the nodes left awake elsewhere */
   o->cfg.local = local;
   /* nodes near tangled elements and nodes of poor elements (those that set
    * the mesh's worst quality) never sleep */
@@ -173,7 +173,7 @@ static hoc_status sweep(run *r, size_t *moved) {
    * puts its block to sleep */
   o->cfg.min_gain = r->opts.tolerance * free_objective(o, r->f) /
                     (double)(r->res.free_nodes ? r->res.free_nodes : 1);
-  o->cfg.untangling = r->tangled > 0;
+  o->cfg.wake_factor = r->tangled ? HOC_OPT_WAKE_UNTANGLING : HOC_OPT_WAKE_SMOOTHING;
   if (r->it == r->it0 + 1) {
     HOC_TRY(hoc_opt_screen(o));
     hoc_opt_wake_all(o);

@@ -204,20 +204,11 @@ static int block_trial(hoc_opt *o, size_t b, hoc_opt_scratch *s, double fmax, do
   return ok;
 }
 
-/* How many times the sleeping threshold a move of block b must gain to
- * wake the nodes around it: any move of a block that touches a tangled
- * element or one of its region (there every change reshapes the fold);
- * while untangling, every move near a fold (untangling makes room by
- * moving nodes further out); elsewhere only significant ones (small ones
- * would spread waves of smaller ones through the whole mesh, a wave per
- * fold left). */
-static double wake_factor(const hoc_opt *o, size_t b) {
+/* Block b touches a tangled element or one next to it. */
+static int near_tangled(const hoc_opt *o, size_t b) {
   for (size_t a = o->B->be_start[b]; a < o->B->be_start[b + 1]; ++a)
-    if (o->el.region[o->B->be_elem[a]] || !o->el.valid[o->B->be_elem[a]]) return 0;
-  if (o->cfg.untangling)
-    for (size_t a = o->B->bn_start[b]; a < o->B->bn_start[b + 1]; ++a)
-      if (o->node.near[o->B->bn_node[a]]) return HOC_OPT_WAKE_UNTANGLING;
-  return HOC_OPT_WAKE_SMOOTHING;
+    if (o->el.region[o->B->be_elem[a]] || !o->el.valid[o->B->be_elem[a]]) return 1;
+  return 0;
 }
 
 /* One colour: a Gauss-Newton step per active block, then a common
@@ -317,7 +308,9 @@ hoc_status hoc_opt_do_color(hoc_opt *o, int color, hoc_opt_scratch *scr, int nth
       *moved += nodes;
       /* only a significant move wakes the neighbourhood (small ones would
        * spread waves of smaller ones through the whole mesh) */
-      if (o->trial.f0[b] - o->trial.fnew[b] < wake_factor(o, b) * o->cfg.min_gain * (double)nodes)
+      if (o->trial.f0[b] - o->trial.fnew[b] <
+              o->cfg.wake_factor * o->cfg.min_gain * (double)nodes &&
+          !near_tangled(o, b))
         continue;
       /* wake every node of the elements it touches (itself included) */
       for (size_t c = o->B->be_start[b]; c < o->B->be_start[b + 1]; ++c) {

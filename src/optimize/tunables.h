@@ -55,11 +55,10 @@
 #define HOC_OPT_POOR_Q_SHARE 0.5
 
 /* A moved block wakes the nodes around it if its gain is at least this
- * many times the sleeping threshold: every move of a block within
- * HOC_OPT_NEAR_RINGS of a tangled element (untangling makes room by moving
- * nodes further out), elsewhere only significant ones (small ones spread
- * waves of smaller ones through the whole mesh: with one fold left, a wave
- * that reaches every node each sweep). */
+ * many times the sleeping threshold: every move while some element is
+ * tangled (untangling makes room by moving nodes further out), only
+ * significant ones while smoothing (small ones would spread waves of
+ * smaller ones through the whole mesh). */
 #define HOC_OPT_WAKE_UNTANGLING 1
 #define HOC_OPT_WAKE_SMOOTHING 10
 

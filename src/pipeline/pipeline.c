@@ -174,9 +174,10 @@ static hoc_status linear_mesh(const hoc_run *run, hoc_model *model, hoc_linear_o
 }
 
 /* The start of a high order's optimisation from the optimised coarse
- * order (HOC_PIPELINE_COARSE_FROM): *ho becomes lin raised to the coarse
- * order, optimised, and raised to ho's order, unless that leaves elements
- * tangled at the coarse order (then *ho stays the direct raise). */
+ * order (HOC_PIPELINE_COARSE_FROM): *ho (the direct raise, measured)
+ * becomes lin raised to the coarse order, optimised, and raised to the
+ * order asked, unless that leaves elements tangled at the coarse order
+ * (then the direct raise, made again). */
 static hoc_status coarse_start(const hoc_run *run, hoc_stages *r, const hoc_mesh *lin,
                                hoc_mesh **ho) {
   const hoc_mesh_options *o = &run->o;
@@ -184,6 +185,8 @@ static hoc_status coarse_start(const hoc_run *run, hoc_stages *r, const hoc_mesh
   hoc_status status = HOC_OK;
   HOC_TRY(hoc_run_event(run, HOC_EVENT_PROGRESS, "optimising at order %d first",
                         HOC_PIPELINE_COARSE_ORDER));
+  /* the direct raise is measured already: made again only if needed */
+  hoc_mesh_destroy(ho);
   double t0 = hoc_pipeline_now();
   HOC_TRY_GOTO(hoc_mesh_elevate(lin, HOC_PIPELINE_COARSE_ORDER, o->nodeset, &coarse), done);
   HOC_TRY_GOTO(hoc_repair_optimize(run, r, "coarse", coarse, NULL), done);
@@ -194,6 +197,7 @@ static hoc_status coarse_start(const hoc_run *run, hoc_stages *r, const hoc_mesh
                                HOC_PIPELINE_COARSE_ORDER, hoc_stages_last(r)->stage.stats.tangled,
                                o->order),
                  done);
+    HOC_TRY_GOTO(hoc_mesh_elevate(lin, o->order, o->nodeset, ho), done);
     goto done;
   }
   t0 = hoc_pipeline_now();
