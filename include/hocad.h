@@ -271,6 +271,38 @@ hoc_status hoc_mesh_max_cad_distance(const hoc_mesh *mesh, double *distance);
  *  and the mesh records how far, without refusing it. 0 for NULL. */
 double hoc_mesh_face_gap(const hoc_mesh *mesh);
 
+/* Arrays of a mesh, copied into the caller's arrays (what bindings turn into
+ * arrays of their own). Nodes are numbered 0..hoc_mesh_num_nodes-1 and
+ * elements 0..hoc_mesh_num_elements-1, in the order of every other per-node
+ * and per-element array of this interface (hoc_mesh_measure, ...); a .msh
+ * file hoc_mesh_write_msh writes numbers them differently (its node tags
+ * are grouped by entity). */
+
+/** Node positions.
+ *  @param[out] xyz  [hoc_mesh_num_nodes][3] x, y, z of each node */
+hoc_status hoc_mesh_nodes(const hoc_mesh *mesh, double *xyz);
+
+/** Where each node lies on the CAD. Any output may be NULL.
+ *  @param[out] dim    [hoc_mesh_num_nodes] 0: on a CAD vertex, 1: on a curve, 2: inside a face
+ *  @param[out] tag    [hoc_mesh_num_nodes] the kernel's tag of that vertex, curve or face
+ *  @param[out] param  [hoc_mesh_num_nodes][2] its parametric coordinates there: (u, v) on
+ *                     the face, (t, 0) on the curve, (0, 0) at a vertex */
+hoc_status hoc_mesh_node_entities(const hoc_mesh *mesh, int *dim, int *tag, double *param);
+
+/** The nodes of each element, in gmsh's node ordering of the order-p
+ *  triangle (also VTK's Lagrange triangle's): the 3 corners, then the p-1
+ *  nodes of each edge (corner 0 to 1, 1 to 2, 2 to 0, each from its first
+ *  corner), then the interior nodes, recursively as a triangle of order
+ *  p-3 in the same ordering. The nodes sit at the mesh's node set
+ *  (hoc_mesh_nodeset: convert to equispaced for the positions MSH and VTU
+ *  files mean).
+ *  @param[out] nodes  [hoc_mesh_num_elements][(p+1)(p+2)/2] 0-based node numbers */
+hoc_status hoc_mesh_elements(const hoc_mesh *mesh, size_t *nodes);
+
+/** The CAD face of each element (hoc_mesh_element_face_tag of all at once).
+ *  @param[out] tags  [hoc_mesh_num_elements] the kernel's face tag */
+hoc_status hoc_mesh_element_faces(const hoc_mesh *mesh, int *tags);
+
 /* ------------------------------------------------------------------------ */
 /* Quality                                                                  */
 
