@@ -1,5 +1,6 @@
-/* Why an order-1 element is tangled: inverted on the surface, or valid
- * once the face's normal at a singular corner is taken along the element.
+/* Why an order-1 element is tangled: inverted on the surface (across a
+ * fold of the face, or not), or valid once the face's normal at a
+ * singular corner is taken along the element.
  * SPDX-License-Identifier: GPL-2.0-or-later
  *
  * A straight triangle is valid when its normal t = (x1 - x0) x (x2 - x0)
@@ -54,6 +55,49 @@ static hoc_status corner_normal(const hoc_mesh *m, size_t e, int k, double *n) {
   return HOC_OK;
 }
 
+/* Lattice points per side of an element's (u, v) triangle at which the
+ * fold test samples the face's normal: neighbours 1/8 of the element
+ * apart. A smooth face turns its normal by more than a right angle over
+ * that distance only where it is at least eight times too curved for the
+ * element, and a fold reverses it at once. */
+#define FOLD_SAMPLES 8
+
+hoc_status hoc_mesh_element_folds(const hoc_mesh *mesh, size_t e, int *folds) {
+  HOC_CHECK(mesh && folds && e < mesh->n_elems, HOC_ERR_ARGUMENT, "fold test: bad argument");
+  enum { N = FOLD_SAMPLES, POINTS = (N + 1) * (N + 2) / 2 };
+  int f = mesh->elem_face[e];
+  const double *c = mesh->elem_uv + 2 * (size_t)mesh->np * e; /* corners first */
+  double uv[2 * POINTS], du[3 * POINTS], dv[3 * POINTS], n[3 * POINTS];
+  int regular[POINTS], at[N + 1][N + 1];
+  int k = 0;
+  for (int i = 0; i <= N; ++i)
+    for (int j = 0; i + j <= N; ++j, ++k) {
+      double a = (double)i / N, b = (double)j / N;
+      for (int d = 0; d < 2; ++d)
+        uv[2 * k + d] = (1 - a - b) * c[d] + a * c[2 + d] + b * c[4 + d];
+      at[i][j] = k;
+    }
+  HOC_TRY(hoc_cad_face_eval(mesh->model, f, POINTS, uv, NULL, du, dv));
+  for (k = 0; k < POINTS; ++k) {
+    cross(du + 3 * k, dv + 3 * k, n + 3 * k);
+    /* where phi_u x phi_v vanishes (a pole, a collapsed side) its sign
+     * is rounding: no sample */
+    regular[k] = sqrt(dot(n + 3 * k, n + 3 * k)) >
+                 1e-10 * (dot(du + 3 * k, du + 3 * k) + dot(dv + 3 * k, dv + 3 * k));
+  }
+  *folds = 0;
+  for (int i = 0; i <= N && !*folds; ++i)
+    for (int j = 0; i + j <= N && !*folds; ++j) {
+      /* the lattice's three edge directions from (i, j) */
+      int p = at[i][j], q[3] = {i + j < N ? at[i + 1][j] : -1, i + j < N ? at[i][j + 1] : -1,
+                                j > 0 ? at[i + 1][j - 1] : -1};
+      for (int m = 0; m < 3 && !*folds; ++m)
+        *folds = q[m] >= 0 && regular[p] && regular[q[m]] &&
+                 dot(n + 3 * p, n + 3 * q[m]) < 0;
+    }
+  return HOC_OK;
+}
+
 hoc_status hoc_mesh_inverted_kinds(const hoc_mesh *mesh, const unsigned char *tangled,
                                    unsigned char *kind) {
   HOC_CHECK(mesh && tangled && kind, HOC_ERR_ARGUMENT, "NULL argument");
@@ -77,7 +121,11 @@ hoc_status hoc_mesh_inverted_kinds(const hoc_mesh *mesh, const unsigned char *ta
       HOC_TRY(corner_normal(mesh, e, k, n));
       valid = dot(t, n) > 0;
     }
-    kind[e] = valid ? HOC_INVERTED_AT_SINGULAR : HOC_INVERTED_ON_CAD;
+    int folds = 0;
+    if (!valid) HOC_TRY(hoc_mesh_element_folds(mesh, e, &folds));
+    kind[e] = valid   ? HOC_INVERTED_AT_SINGULAR
+              : folds ? HOC_INVERTED_ACROSS_FOLD
+                      : HOC_INVERTED_ON_CAD;
   }
   return HOC_OK;
 }

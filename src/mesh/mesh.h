@@ -178,11 +178,23 @@ typedef enum hoc_inverted_kind {
   HOC_INVERTED_NONE = 0,        /* not tangled */
   HOC_INVERTED_ON_CAD = 1,      /* its normal turns away from the face's at a corner: the
                                    straight triangle is inverted on the surface */
-  HOC_INVERTED_AT_SINGULAR = 2  /* valid once the face's normal at a corner where
+  HOC_INVERTED_AT_SINGULAR = 2, /* valid once the face's normal at a corner where
                                    phi_u x phi_v vanishes (a pole, an apex, a collapsed
                                    B-spline corner) is the limit along the element: the
                                    measure's one normal per slot is another there */
+  HOC_INVERTED_ACROSS_FOLD = 3  /* inverted on the CAD, and the face's own normal reverses
+                                   inside it (hoc_mesh_element_folds): no straight triangle
+                                   across the fold is valid, however small */
 } hoc_inverted_kind;
+
+/** *folds: whether the normal phi_u x phi_v of element e's face reverses
+ *  inside the (u, v) triangle of its corners (any order): two neighbouring
+ *  points of a lattice of 1/8 of the element have opposite normals. A face
+ *  folds so where its parametrisation turns back on itself along a curve
+ *  (phi_u x phi_v changes sign there), as spline patches with a pinched
+ *  strip at a side do (IGES type 114 surfaces converted to B-splines);
+ *  points where phi_u x phi_v vanishes are not compared. */
+hoc_status hoc_mesh_element_folds(const hoc_mesh *mesh, size_t e, int *folds);
 
 /** kind[e] (hoc_inverted_kind) of each element flagged in tangled[e] (from
  *  hoc_mesh_measure) of an order-1 mesh. */
