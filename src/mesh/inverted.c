@@ -77,6 +77,19 @@ hoc_status hoc_mesh_element_folds(const hoc_mesh *mesh, size_t e, int *folds) {
         uv[2 * k + d] = (1 - a - b) * c[d] + a * c[2 + d] + b * c[4 + d];
       at[i][j] = k;
     }
+  /* a corner where phi_u x phi_v vanishes: the limit along the element
+   * (a fold next to a collapsed side lies between it and the next sample) */
+  for (int corner = 0; corner < 3; ++corner) {
+    double centroid[2], *p = uv + 2 * at[corner == 1 ? N : 0][corner == 2 ? N : 0];
+    for (int d = 0; d < 2; ++d)
+      centroid[d] = (c[d] + c[2 + d] + c[4 + d]) / 3;
+    double dd[6], m[3];
+    HOC_TRY(hoc_cad_face_eval(mesh->model, f, 1, p, NULL, dd, dd + 3));
+    cross(dd, dd + 3, m);
+    if (sqrt(dot(m, m)) > 1e-10 * (dot(dd, dd) + dot(dd + 3, dd + 3))) continue;
+    for (int d = 0; d < 2; ++d)
+      p[d] += ALONG_ELEMENT * (centroid[d] - p[d]);
+  }
   HOC_TRY(hoc_cad_face_eval(mesh->model, f, POINTS, uv, NULL, du, dv));
   for (k = 0; k < POINTS; ++k) {
     cross(du + 3 * k, dv + 3 * k, n + 3 * k);
