@@ -555,6 +555,7 @@ hoc_status hoc_repair_linear(const hoc_run *run, hoc_model *model, const hoc_lin
       goto done;
     }
     if (s != HOC_OK) { /* gmsh could not: the faces keep their meshes */
+      hoc_mesh_destroy(&trial);
       HOC_TRY_GOTO(hoc_run_event(run, HOC_EVENT_NOTE, "gmsh's %s algorithm failed: %s",
                                  algorithm_name(others[a]), hoc_last_error()),
                    done);
