@@ -46,6 +46,19 @@
 #define HOC_PIPELINE_LOCAL_MIN_ORDER 6
 #define HOC_PIPELINE_LOCAL_RINGS 2
 
+/* gmsh's 2D algorithms (mesh/mesh.h) the faces holding linear triangles
+ * inverted on the CAD are meshed again with, in turn (hoc_repair_linear;
+ * the T106 blade's face 2 at the default size: 2 inverted with gmsh's
+ * default Frontal-Delaunay, 0 with MeshAdapt, 4 with Delaunay). */
+#define HOC_PIPELINE_LINEAR_ALGORITHMS {HOC_GMSH_MESH_ADAPT, HOC_GMSH_DELAUNAY}
+
+/* Splits per chain where the tangled elements are on faces that fold
+ * (hoc_repair_tangled_on_folds): a split adds elements across the fold
+ * (surf114.igs, its inverted linear elements split: 29, 67, 148), and each
+ * split's optimisation keeps the ones across it tangled to its last sweep;
+ * the bottle's one split at order 2 is its first. */
+#define HOC_PIPELINE_FOLD_SPLITS 1
+
 /* The most stages one attempt has: linear, high-order, split, optimized,
  * smoothed, written (hoc_mesh_repair: input, re-placed or split, optimized). */
 enum { HOC_PIPELINE_MAX_STAGES = 6 };
@@ -128,7 +141,8 @@ hoc_status hoc_repair_refine_tangled(const hoc_run *run, hoc_stages *r, int n_ke
                                      const hoc_mesh *start, int trial);
 
 /* hoc_repair_refine_tangled on a copy of *ho, kept (*done = 1) only if it
- * leaves no element tangled; with keep_fewest, kept if it leaves fewer
+ * leaves no element tangled; with keep_fewest (faces that fold), at most
+ * HOC_PIPELINE_FOLD_SPLITS splits per chain, kept if they leave fewer
  * tangled than *ho has, and *done = 1 either way. */
 hoc_status hoc_repair_split_first(const hoc_run *run, hoc_stages *r, hoc_mesh **ho,
                                   int keep_fewest, int *done);

@@ -234,12 +234,17 @@ hoc_status hoc_repair_split_first(const hoc_run *run, hoc_stages *r, hoc_mesh **
           ? hoc_run_event(run, HOC_EVENT_REPAIR,
                           "the tangled elements are on faces that fold (their normal reverses "
                           "inside them), which a finer mesh crosses with more elements: "
-                          "splitting them instead of meshing the faces again (the result with "
-                          "the fewest tangled is kept)")
+                          "splitting them at most %d time(s) per chain instead of meshing the "
+                          "faces again (the result with the fewest tangled is kept)",
+                          HOC_PIPELINE_FOLD_SPLITS)
           : hoc_run_event(run, HOC_EVENT_REPAIR,
                           "splitting the tangled elements first (kept if that leaves none "
                           "tangled)");
-  if (status == HOC_OK) status = hoc_repair_refine_tangled(run, &trial, 2, &copy, NULL, 1);
+  hoc_run fold_run = *run;
+  if (keep_fewest && fold_run.o.refinements > HOC_PIPELINE_FOLD_SPLITS)
+    fold_run.o.refinements = HOC_PIPELINE_FOLD_SPLITS;
+  if (status == HOC_OK)
+    status = hoc_repair_refine_tangled(&fold_run, &trial, 2, &copy, NULL, 1);
   size_t left = status != HOC_OK ? 0 : hoc_stages_last(&trial)->stage.stats.tangled;
   if (status == HOC_OK && keep_fewest) {
     int made = trial.refinements;
@@ -497,7 +502,7 @@ static const char *algorithm_name(int a) {
 
 hoc_status hoc_repair_linear(const hoc_run *run, hoc_model *model, const hoc_linear_options *lo,
                              hoc_mesh **lin) {
-  static const int others[] = {HOC_GMSH_MESH_ADAPT, HOC_GMSH_DELAUNAY};
+  static const int others[] = HOC_PIPELINE_LINEAR_ALGORITHMS;
   enum { N_OTHERS = sizeof others / sizeof *others };
   int nf = model->n_faces;
   size_t ne = hoc_mesh_num_elements(*lin), count[4], left;
