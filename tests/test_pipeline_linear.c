@@ -39,8 +39,7 @@ static int on_event(void *user, const hoc_event *ev) {
   if (ev->kind == HOC_EVENT_NOTE && strstr(ev->message, "cross a fold of their face"))
     s->fold_note++;
   if (ev->kind == HOC_EVENT_REPAIR && strstr(ev->message, "on faces that fold")) s->fold_split++;
-  if (ev->kind == HOC_EVENT_REPAIR && strstr(ev->message, "with edges half as long"))
-    s->remeshed++;
+  if (ev->kind == HOC_EVENT_REPAIR && strstr(ev->message, "with edges half as long")) s->remeshed++;
   return 0;
 }
 
@@ -87,8 +86,7 @@ static void test_blade(void) {
     count_kinds(lin, count);
     printf("blade, gmsh's default algorithm: %zu elements, %zu inverted on the CAD, %zu across "
            "a fold\n",
-           hoc_mesh_num_elements(lin), count[HOC_INVERTED_ON_CAD],
-           count[HOC_INVERTED_ACROSS_FOLD]);
+           hoc_mesh_num_elements(lin), count[HOC_INVERTED_ON_CAD], count[HOC_INVERTED_ACROSS_FOLD]);
     CHECK(count[HOC_INVERTED_ON_CAD] > 0);
     CHECK(count[HOC_INVERTED_ACROSS_FOLD] == 0);
     CHECK(count_folds(lin) == 0);

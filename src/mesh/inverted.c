@@ -51,7 +51,8 @@ static hoc_status corner_normal(const hoc_mesh *m, size_t e, int k, double *n) {
     cross(du, dv, n);
   }
   double sign = m->face_orient[f] < 0 ? -1.0 : 1.0;
-  for (int d = 0; d < 3; ++d) n[d] *= sign;
+  for (int d = 0; d < 3; ++d)
+    n[d] *= sign;
   return HOC_OK;
 }
 
@@ -105,8 +106,7 @@ hoc_status hoc_mesh_element_folds(const hoc_mesh *mesh, size_t e, int *folds) {
       int p = at[i][j], q[3] = {i + j < N ? at[i + 1][j] : -1, i + j < N ? at[i][j + 1] : -1,
                                 j > 0 ? at[i + 1][j - 1] : -1};
       for (int m = 0; m < 3 && !*folds; ++m)
-        *folds = q[m] >= 0 && regular[p] && regular[q[m]] &&
-                 dot(n + 3 * p, n + 3 * q[m]) < 0;
+        *folds = q[m] >= 0 && regular[p] && regular[q[m]] && dot(n + 3 * p, n + 3 * q[m]) < 0;
     }
   return HOC_OK;
 }

@@ -50,7 +50,8 @@
  * inverted on the CAD are meshed again with, in turn (hoc_repair_linear;
  * the T106 blade's face 2 at the default size: 2 inverted with gmsh's
  * default Frontal-Delaunay, 0 with MeshAdapt, 4 with Delaunay). */
-#define HOC_PIPELINE_LINEAR_ALGORITHMS {HOC_GMSH_MESH_ADAPT, HOC_GMSH_DELAUNAY}
+#define HOC_PIPELINE_LINEAR_ALGORITHMS                                                             \
+  { HOC_GMSH_MESH_ADAPT, HOC_GMSH_DELAUNAY }
 
 /* Splits per chain where the tangled elements are on faces that fold
  * (hoc_repair_tangled_on_folds): a split adds elements across the fold
@@ -144,8 +145,8 @@ hoc_status hoc_repair_refine_tangled(const hoc_run *run, hoc_stages *r, int n_ke
  * leaves no element tangled; with keep_fewest (faces that fold), at most
  * HOC_PIPELINE_FOLD_SPLITS splits per chain, kept if they leave fewer
  * tangled than *ho has, and *done = 1 either way. */
-hoc_status hoc_repair_split_first(const hoc_run *run, hoc_stages *r, hoc_mesh **ho,
-                                  int keep_fewest, int *done);
+hoc_status hoc_repair_split_first(const hoc_run *run, hoc_stages *r, hoc_mesh **ho, int keep_fewest,
+                                  int *done);
 
 /* Inverted linear triangles: gmsh's mesh of some B-spline faces has
  * straight triangles whose normal turns against the face's at a corner

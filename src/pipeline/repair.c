@@ -4,8 +4,8 @@
  * their faces again finer, optimise the poor ones once more), and the two
  * starts of hoc_mesh_repair.
  * SPDX-License-Identifier: GPL-2.0-or-later */
-#include "pipeline/pipeline.h"
 #include "mesh/mesh.h"
+#include "pipeline/pipeline.h"
 
 #include <stdio.h>
 #include <stdlib.h>
@@ -223,8 +223,8 @@ hoc_status hoc_repair_refine_tangled(const hoc_run *run, hoc_stages *r, int n_ke
   return status;
 }
 
-hoc_status hoc_repair_split_first(const hoc_run *run, hoc_stages *r, hoc_mesh **ho,
-                                  int keep_fewest, int *done) {
+hoc_status hoc_repair_split_first(const hoc_run *run, hoc_stages *r, hoc_mesh **ho, int keep_fewest,
+                                  int *done) {
   *done = 0;
   hoc_mesh *copy = NULL;
   HOC_TRY(hoc_mesh_copy(*ho, &copy));
@@ -243,8 +243,7 @@ hoc_status hoc_repair_split_first(const hoc_run *run, hoc_stages *r, hoc_mesh **
   hoc_run fold_run = *run;
   if (keep_fewest && fold_run.o.refinements > HOC_PIPELINE_FOLD_SPLITS)
     fold_run.o.refinements = HOC_PIPELINE_FOLD_SPLITS;
-  if (status == HOC_OK)
-    status = hoc_repair_refine_tangled(&fold_run, &trial, 2, &copy, NULL, 1);
+  if (status == HOC_OK) status = hoc_repair_refine_tangled(&fold_run, &trial, 2, &copy, NULL, 1);
   size_t left = status != HOC_OK ? 0 : hoc_stages_last(&trial)->stage.stats.tangled;
   if (status == HOC_OK && keep_fewest) {
     int made = trial.refinements;
@@ -601,8 +600,8 @@ hoc_status hoc_repair_linear(const hoc_run *run, hoc_model *model, const hoc_lin
     for (int f = 0; f < nf && len < sizeof text; ++f)
       if (choice[f])
         len += (size_t)snprintf(text + len, sizeof text - len, "%sface %d with %s (%zu -> %zu)",
-                                len ? ", " : "", model->faces[f].tag,
-                                algorithm_name(choice[f]), on_cad[f], best[f]);
+                                len ? ", " : "", model->faces[f].tag, algorithm_name(choice[f]),
+                                on_cad[f], best[f]);
     if (len)
       HOC_TRY_GOTO(hoc_run_event(run, HOC_EVENT_NOTE,
                                  "meshed again: %s; %zu linear element(s) inverted on the CAD "

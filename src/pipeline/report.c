@@ -1,8 +1,8 @@
 /* The pipelines' report: its stages, what it finds about the result (the
  * tangled elements and why, elements at CAD cusps) and its JSON.
  * SPDX-License-Identifier: GPL-2.0-or-later */
-#include "pipeline/pipeline.h"
 #include "mesh/mesh.h"
+#include "pipeline/pipeline.h"
 
 #include <stdarg.h>
 #include <stdio.h>
