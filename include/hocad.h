@@ -571,7 +571,9 @@ typedef struct hoc_mesh_options {
   int refinements;        /**< where elements stay tangled: at most this many remeshings of
                                their faces, and splits per chain (-1, the default: 2 for
                                hoc_mesh_model, 3 with a given linear mesh, 6 for
-                               hoc_mesh_repair; 0: none) */
+                               hoc_mesh_repair; 0: none); on faces that fold (their normal
+                               reverses inside them) hoc_mesh_model makes one split per
+                               chain and no remeshing */
   int keep_nodes;         /**< hoc_mesh_repair: optimise from the input's own high-order
                                nodes only, never from nodes re-placed from its corners */
   int equispaced;         /**< hoc_mesh_model: the result converted to equispaced nodes, what

@@ -100,6 +100,7 @@ enum { MESSAGE_MAX = 512 };
 
 typedef struct mesh_job {
   const hoc_model *model;
+  const int *algorithm; /* NULL, or [n_faces] gmsh's 2D algorithm per face (0: its default) */
   int isolate; /* find the faces that crash gmsh first, and leave them out */
   int face;    /* a probe of one face (index): does meshing it alone crash? */
 } mesh_job;
@@ -189,6 +190,16 @@ static int mesh_child(void *arg, int fd) {
   /* gmsh's errors (its verbosity is errors only) go to the child's
    * output, so that the cause of a crash is there after it */
   gmshOptionSetNumber("General.Terminal", 1, &ierr);
+  /* the faces meshed with another algorithm (set here: the parent's gmsh
+   * keeps its defaults); a face probe, forked from here, inherits them */
+  for (int f = 0; job->algorithm && f < model->n_faces; ++f) {
+    if (job->algorithm[f] <= 0) continue;
+    gmshModelMeshSetAlgorithm(2, model->faces[f].tag, job->algorithm[f], &ierr);
+    if (!ierr) continue;
+    for (int k = 0; job->isolate && k < model->n_faces; ++k) /* no face tried */
+      if (!send_u64(fd, 0)) return 1;
+    return send_u64(fd, 1) && send_gmsh_error(fd, "choosing a face's algorithm") ? 0 : 1;
+  }
   if (job->isolate) {
     gmshModelMeshGenerate(1, &ierr);
     if (ierr) { /* no face tried, then gmsh's error */
@@ -200,7 +211,7 @@ static int mesh_child(void *arg, int fd) {
     if (!keep) return 1;
     int sent = 1;
     for (int f = 0; f < model->n_faces && sent; ++f) {
-      mesh_job probe = {model, 0, f};
+      mesh_job probe = {model, job->algorithm, 0, f};
       hoc_child c;
       hoc_child_end end;
       uint64_t ok = 1;
@@ -419,9 +430,10 @@ typedef enum run_outcome {
  * child first finds the faces that crash gmsh: crashed[f] receives the
  * signal that ended face f's probe (0: none), *probed how many faces it
  * reported before it ended. */
-static run_outcome run_mesher(const hoc_model *model, unsigned char *crashed, int *probed,
-                              linear_parts *parts, hoc_status *error, hoc_child_end *end) {
-  mesh_job job = {model, crashed != NULL, -1};
+static run_outcome run_mesher(const hoc_model *model, const int *algorithm, unsigned char *crashed,
+                              int *probed, linear_parts *parts, hoc_status *error,
+                              hoc_child_end *end) {
+  mesh_job job = {model, algorithm, crashed != NULL, -1};
   hoc_child child;
   *error = hoc_child_start(&child, mesh_child, &job);
   if (*error != HOC_OK) return RUN_FAILED;
@@ -463,10 +475,11 @@ static hoc_status crash_error(int sig, const char *first_error, const char *doin
                    first_error[0] ? ": " : "", first_error);
 }
 
-/* One linear mesh with gmsh's current size settings (model and mesh
- * checked by the caller). */
+/* One linear mesh with gmsh's current size settings and the faces'
+ * algorithms (NULL: gmsh's default everywhere); model and mesh checked by
+ * the caller. */
 static hoc_status generate_once(hoc_model *model, const hoc_linear_options *options,
-                                hoc_mesh **mesh) {
+                                const int *algorithm, hoc_mesh **mesh) {
   hoc_linear_options o;
   hoc_linear_options_default(&o);
   if (options) o = *options;
@@ -499,7 +512,7 @@ static hoc_status generate_once(hoc_model *model, const hoc_linear_options *opti
   hoc_status status = HOC_OK, err;
   hoc_child_end end;
   unsigned char *crashed = NULL;
-  run_outcome run = run_mesher(model, NULL, NULL, &p, &err, &end);
+  run_outcome run = run_mesher(model, algorithm, NULL, NULL, &p, &err, &end);
   if (run == RUN_CRASHED && !hoc_signal_is_interrupt(end.signal) && model->n_faces > 1) {
     /* mesh the faces that do not crash gmsh; the others count as failed */
     hoc_child_end first = end;
@@ -510,7 +523,7 @@ static hoc_status generate_once(hoc_model *model, const hoc_linear_options *opti
       status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
       goto done;
     }
-    run = run_mesher(model, crashed, &probed, &p, &err, &end);
+    run = run_mesher(model, algorithm, crashed, &probed, &p, &err, &end);
     for (int f = 0; f < probed; ++f) {
       if (crashed[f] && hoc_signal_is_interrupt(crashed[f])) {
         status = crash_error(crashed[f], "", "");
@@ -594,13 +607,17 @@ static double size_at(int dim, int tag, double x, double y, double z, void *data
   return h > 0 ? h : 1e22;
 }
 
-hoc_status hoc_mesh_generate_linear_gmsh(hoc_model *model, const hoc_linear_options *options,
-                                         hoc_mesh **mesh) {
+hoc_status hoc_mesh_generate_linear_with(hoc_model *model, const hoc_linear_options *options,
+                                         const int *algorithm, hoc_mesh **mesh) {
   HOC_CHECK(mesh, HOC_ERR_ARGUMENT, "mesh output is NULL");
   *mesh = NULL;
   HOC_CHECK(model && model->is_gmsh, HOC_ERR_ARGUMENT,
             "linear meshing needs a model opened from a CAD file");
-  if (!options || !options->face_size) return generate_once(model, options, mesh);
+  for (int f = 0; algorithm && f < model->n_faces; ++f)
+    HOC_CHECK(algorithm[f] >= 0 && algorithm[f] <= HOC_GMSH_ALGORITHM_MAX, HOC_ERR_ARGUMENT,
+              "meshing algorithm %d of face %d is not one of gmsh's (0..%d)", algorithm[f],
+              model->faces[f].tag, HOC_GMSH_ALGORITHM_MAX);
+  if (!options || !options->face_size) return generate_once(model, options, algorithm, mesh);
   /* faces meshed finer: the bound on the face and on its boundary curves */
   sizing s = {0};
   for (int f = 0; f < model->n_faces; ++f) {
@@ -631,7 +648,7 @@ hoc_status hoc_mesh_generate_linear_gmsh(hoc_model *model, const hoc_linear_opti
   int ierr = 0;
   gmshModelMeshSetSizeCallback(size_at, &s, &ierr);
   status = ierr ? HOC_ERROR(HOC_ERR_MESH, "gmsh refused the mesh size callback")
-                : generate_once(model, options, mesh);
+                : generate_once(model, options, algorithm, mesh);
   gmshModelMeshRemoveSizeCallback(&ierr);
 done:
   free(s.face_size);
@@ -639,7 +656,12 @@ done:
   return status;
 }
 
+hoc_status hoc_mesh_generate_linear_gmsh(hoc_model *model, const hoc_linear_options *options,
+                                         hoc_mesh **mesh) {
+  return hoc_mesh_generate_linear_with(model, options, NULL, mesh);
+}
+
 hoc_status hoc_mesh_generate_linear(hoc_model *model, const hoc_linear_options *options,
                                     hoc_mesh **mesh) {
-  return hoc_mesh_generate_linear_gmsh(model, options, mesh);
+  return hoc_mesh_generate_linear_with(model, options, NULL, mesh);
 }

@@ -181,8 +181,47 @@ hoc_status hoc_mesh_grid_linear(hoc_model *model, int nu, int nv, hoc_mesh **mes
  *  a valid one. *untangled: how many it untangled. */
 hoc_status hoc_mesh_polish(hoc_mesh *mesh, hoc_measure measure, int fix_curves, size_t *untangled);
 
+/** Why an order-1 element the measure finds tangled is (mesh/inverted.c). */
+typedef enum hoc_inverted_kind {
+  HOC_INVERTED_NONE = 0,        /* not tangled */
+  HOC_INVERTED_ON_CAD = 1,      /* its normal turns away from the face's at a corner: the
+                                   straight triangle is inverted on the surface */
+  HOC_INVERTED_AT_SINGULAR = 2, /* valid once the face's normal at a corner where
+                                   phi_u x phi_v vanishes (a pole, an apex, a collapsed
+                                   B-spline corner) is the limit along the element: the
+                                   measure's one normal per slot is another there */
+  HOC_INVERTED_ACROSS_FOLD = 3  /* inverted on the CAD, and the face's own normal reverses
+                                   inside it (hoc_mesh_element_folds): no straight triangle
+                                   across the fold is valid, however small */
+} hoc_inverted_kind;
+
+/** *folds: whether the normal phi_u x phi_v of element e's face reverses
+ *  inside the (u, v) triangle of its corners (any order): two neighbouring
+ *  points of a lattice of 1/8 of the element have opposite normals. A face
+ *  folds so where its parametrisation turns back on itself along a curve
+ *  (phi_u x phi_v changes sign there), as spline patches with a pinched
+ *  strip at a side do (IGES type 114 surfaces converted to B-splines);
+ *  points where phi_u x phi_v vanishes are not compared. */
+hoc_status hoc_mesh_element_folds(const hoc_mesh *mesh, size_t e, int *folds);
+
+/** kind[e] (hoc_inverted_kind) of each element flagged in tangled[e] (from
+ *  hoc_mesh_measure) of an order-1 mesh. */
+hoc_status hoc_mesh_inverted_kinds(const hoc_mesh *mesh, const unsigned char *tangled,
+                                   unsigned char *kind);
+
 /** Linear surface mesh of the current gmsh model (mesh/linear_gmsh.c). */
 hoc_status hoc_mesh_generate_linear_gmsh(hoc_model *model, const hoc_linear_options *options,
                                          hoc_mesh **mesh);
+
+/** gmsh's 2D meshing algorithms (its Mesh.Algorithm): 1 MeshAdapt,
+ *  5 Delaunay, 6 Frontal-Delaunay (its default), ... up to 11. */
+enum { HOC_GMSH_MESH_ADAPT = 1, HOC_GMSH_DELAUNAY = 5, HOC_GMSH_ALGORITHM_MAX = 11 };
+
+/** hoc_mesh_generate_linear_gmsh with face f meshed by gmsh's 2D algorithm
+ *  algorithm[f] (0: gmsh's default); algorithm NULL: the default on every
+ *  face. The other faces' meshes do not depend on it: gmsh meshes each face
+ *  from the same mesh of the curves. */
+hoc_status hoc_mesh_generate_linear_with(hoc_model *model, const hoc_linear_options *options,
+                                         const int *algorithm, hoc_mesh **mesh);
 
 #endif

@@ -170,7 +170,8 @@ static hoc_status linear_mesh(const hoc_run *run, hoc_model *model, hoc_linear_o
     lo->size_min = unlowered_min;
     HOC_TRY(hoc_mesh_generate_linear(model, lo, lin));
   }
-  return HOC_OK;
+  /* triangles gmsh made inverted on the CAD: their faces meshed again */
+  return hoc_repair_linear(run, model, lo, lin);
 }
 
 /* The start of a high order's optimisation from the optimised coarse
@@ -291,8 +292,9 @@ static hoc_status mesh_model_run(const hoc_run *run, hoc_model *model, model_mes
      * (as below, once remeshing is spent) keeps the rest of the mesh; it
      * is kept if it leaves none tangled (the bottle at order 2: two
      * elements at its thread's end, which two remeshings only make worse) */
-    int split_done = 0;
-    status = hoc_repair_split_first(run, r, &m->ho, &split_done);
+    int split_done = 0, across_folds = 0;
+    HOC_TRY_GOTO(hoc_repair_tangled_on_folds(run, m->ho, &across_folds), done);
+    status = hoc_repair_split_first(run, r, &m->ho, across_folds, &split_done);
     *final = m->ho;
     if (status != HOC_OK || split_done) break;
     hoc_stages attempt_r = *r;

@@ -56,6 +56,20 @@
 #define HOC_PIPELINE_COARSE_ORDER 3
 #define HOC_PIPELINE_LOCAL_RINGS 2
 
+/* gmsh's 2D algorithms (mesh/mesh.h) the faces holding linear triangles
+ * inverted on the CAD are meshed again with, in turn (hoc_repair_linear;
+ * the T106 blade's face 2 at the default size: 2 inverted with gmsh's
+ * default Frontal-Delaunay, 0 with MeshAdapt, 4 with Delaunay). */
+#define HOC_PIPELINE_LINEAR_ALGORITHMS                                                             \
+  { HOC_GMSH_MESH_ADAPT, HOC_GMSH_DELAUNAY }
+
+/* Splits per chain where the tangled elements are on faces that fold
+ * (hoc_repair_tangled_on_folds): a split adds elements across the fold
+ * (surf114.igs, its inverted linear elements split: 29, 67, 148), and each
+ * split's optimisation keeps the ones across it tangled to its last sweep;
+ * the bottle's one split at order 2 is its first. */
+#define HOC_PIPELINE_FOLD_SPLITS 1
+
 /* The most stages one attempt has: linear, high-order, split, optimized,
  * smoothed, written (hoc_mesh_repair: input, re-placed or split, optimized). */
 enum { HOC_PIPELINE_MAX_STAGES = 6 };
@@ -138,8 +152,31 @@ hoc_status hoc_repair_refine_tangled(const hoc_run *run, hoc_stages *r, int n_ke
                                      const hoc_mesh *start, int trial);
 
 /* hoc_repair_refine_tangled on a copy of *ho, kept (*done = 1) only if it
- * leaves no element tangled. */
-hoc_status hoc_repair_split_first(const hoc_run *run, hoc_stages *r, hoc_mesh **ho, int *done);
+ * leaves no element tangled; with keep_fewest (faces that fold), at most
+ * HOC_PIPELINE_FOLD_SPLITS splits per chain, kept if they leave fewer
+ * tangled than *ho has, and *done = 1 either way. */
+hoc_status hoc_repair_split_first(const hoc_run *run, hoc_stages *r, hoc_mesh **ho, int keep_fewest,
+                                  int *done);
+
+/* Inverted linear triangles: gmsh's mesh of some B-spline faces has
+ * straight triangles whose normal turns against the face's at a corner
+ * (hoc_mesh_inverted_kinds: HOC_INVERTED_ON_CAD, away from a fold of the
+ * face), which the optimiser carries into the curved mesh and seldom
+ * undoes. The faces holding them are meshed again with gmsh's MeshAdapt,
+ * then (for those still inverted) its Delaunay algorithm; each face keeps
+ * the mesh with the fewest such elements (its own on a tie: a mesh without
+ * them is never meshed again). *lin (order 1, meshed with lo) becomes the
+ * result. Elements across a fold of their face (HOC_INVERTED_ACROSS_FOLD)
+ * are only named: no mesh of the face avoids them. */
+hoc_status hoc_repair_linear(const hoc_run *run, hoc_model *model, const hoc_linear_options *lo,
+                             hoc_mesh **lin);
+
+/* *all: mesh has tangled elements and every face holding one folds (an
+ * element of it crosses a fold: hoc_mesh_element_folds). A finer mesh of
+ * such a face crosses the fold with more elements (surf114.igs: 26 linear
+ * elements across folds of faces 1, 3 and 4; splitting the inverted ones
+ * twice makes 148), so these faces are split, never meshed again finer. */
+hoc_status hoc_repair_tangled_on_folds(const hoc_run *run, const hoc_mesh *mesh, int *all);
 
 /* The faces of the tangled elements of ho (made from lin) get an edge
  * length bound of half their longest edge in *face_size (allocated on first

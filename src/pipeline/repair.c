@@ -1,7 +1,10 @@
-/* What the pipelines do where the optimiser leaves elements tangled or
- * poor: split them (two chains of splits), mesh their faces again finer,
- * optimise the poor ones once more; and the two starts of hoc_mesh_repair.
+/* What the pipelines do where the linear mesh has inverted triangles (mesh
+ * their faces again with gmsh's other algorithms), where the optimiser
+ * leaves elements tangled or poor (split them in two chains of splits, mesh
+ * their faces again finer, optimise the poor ones once more), and the two
+ * starts of hoc_mesh_repair.
  * SPDX-License-Identifier: GPL-2.0-or-later */
+#include "mesh/mesh.h"
 #include "pipeline/pipeline.h"
 
 #include <stdio.h>
@@ -220,17 +223,48 @@ hoc_status hoc_repair_refine_tangled(const hoc_run *run, hoc_stages *r, int n_ke
   return status;
 }
 
-hoc_status hoc_repair_split_first(const hoc_run *run, hoc_stages *r, hoc_mesh **ho, int *done) {
+hoc_status hoc_repair_split_first(const hoc_run *run, hoc_stages *r, hoc_mesh **ho, int keep_fewest,
+                                  int *done) {
   *done = 0;
   hoc_mesh *copy = NULL;
   HOC_TRY(hoc_mesh_copy(*ho, &copy));
   hoc_stages trial = *r;
   hoc_status status =
-      hoc_run_event(run, HOC_EVENT_REPAIR,
-                    "splitting the tangled elements first (kept if that leaves none "
-                    "tangled)");
-  if (status == HOC_OK) status = hoc_repair_refine_tangled(run, &trial, 2, &copy, NULL, 1);
+      keep_fewest
+          ? hoc_run_event(run, HOC_EVENT_REPAIR,
+                          "the tangled elements are on faces that fold (their normal reverses "
+                          "inside them), which a finer mesh crosses with more elements: "
+                          "splitting them at most %d time(s) per chain instead of meshing the "
+                          "faces again (the result with the fewest tangled is kept)",
+                          HOC_PIPELINE_FOLD_SPLITS)
+          : hoc_run_event(run, HOC_EVENT_REPAIR,
+                          "splitting the tangled elements first (kept if that leaves none "
+                          "tangled)");
+  hoc_run fold_run = *run;
+  if (keep_fewest && fold_run.o.refinements > HOC_PIPELINE_FOLD_SPLITS)
+    fold_run.o.refinements = HOC_PIPELINE_FOLD_SPLITS;
+  if (status == HOC_OK) status = hoc_repair_refine_tangled(&fold_run, &trial, 2, &copy, NULL, 1);
   size_t left = status != HOC_OK ? 0 : hoc_stages_last(&trial)->stage.stats.tangled;
+  if (status == HOC_OK && keep_fewest) {
+    int made = trial.refinements;
+    size_t before = hoc_stages_last(r)->stage.stats.tangled;
+    if (left < before) {
+      hoc_mesh_destroy(ho);
+      *ho = copy;
+      *r = trial;
+    } else {
+      hoc_mesh_destroy(&copy);
+      r->refinements = made;
+    }
+    *done = 1;
+    return left < before ? hoc_run_event(run, HOC_EVENT_NOTE,
+                                         "kept the mesh of refinement %d, which has the fewest "
+                                         "tangled elements (%zu)",
+                                         made, left)
+                         : hoc_run_event(run, HOC_EVENT_NOTE,
+                                         "splitting left no fewer tangled elements: kept the "
+                                         "mesh before it");
+  }
   if (status == HOC_OK && !left) {
     hoc_mesh_destroy(ho);
     *ho = copy;
@@ -415,5 +449,208 @@ hoc_status hoc_repair_optimize_starts(const hoc_run *run, hoc_stages *r, hoc_mes
     r->s[r->n - 2] = r->s[r->n - 1]; /* the re-placed start was not used */
     r->n--;
   }
+  return status;
+}
+
+/* Inverted linear triangles ------------------------------------------------ */
+
+/* Elements of the order-1 mesh `lin` of each kind (hoc_inverted_kind), and
+ * per face index those inverted on the CAD away from a fold (on_cad) and
+ * its elements (elems). kind: [elements]; on_cad, elems: [faces] or NULL. */
+static hoc_status linear_kinds(const hoc_run *run, const hoc_mesh *lin, unsigned char *kind,
+                               size_t *on_cad, size_t *elems, size_t count[4]) {
+  size_t ne = hoc_mesh_num_elements(lin);
+  unsigned char *tangled = NULL;
+  hoc_status status = HOC_OK;
+  HOC_ALLOC_GOTO(tangled, ne, done);
+  HOC_TRY_GOTO(hoc_mesh_measure(lin, run->o.measure, NULL, tangled, NULL), done);
+  HOC_TRY_GOTO(hoc_mesh_inverted_kinds(lin, tangled, kind), done);
+  int nf = lin->model->n_faces;
+  for (int f = 0; on_cad && f < nf; ++f)
+    on_cad[f] = elems[f] = 0;
+  for (int k = 0; k < 4; ++k)
+    count[k] = 0;
+  for (size_t e = 0; e < ne; ++e) {
+    count[kind[e]]++;
+    if (!on_cad) continue;
+    elems[lin->elem_face[e]]++;
+    on_cad[lin->elem_face[e]] += kind[e] == HOC_INVERTED_ON_CAD;
+  }
+done:
+  free(tangled);
+  return status;
+}
+
+/* The CAD tags of the faces with flagged elements (faces_text) for the
+ * elements of kind `k`. */
+static hoc_status kind_faces(const hoc_mesh *mesh, const unsigned char *kind, unsigned char k,
+                             char *buf, size_t size) {
+  size_t ne = hoc_mesh_num_elements(mesh);
+  unsigned char *flag = NULL;
+  HOC_ALLOC(flag, ne);
+  for (size_t e = 0; e < ne; ++e)
+    flag[e] = kind[e] == k;
+  faces_text(mesh, flag, buf, size);
+  free(flag);
+  return HOC_OK;
+}
+
+static const char *algorithm_name(int a) {
+  return a == HOC_GMSH_MESH_ADAPT ? "MeshAdapt" : a == HOC_GMSH_DELAUNAY ? "Delaunay" : "default";
+}
+
+hoc_status hoc_repair_linear(const hoc_run *run, hoc_model *model, const hoc_linear_options *lo,
+                             hoc_mesh **lin) {
+  static const int others[] = HOC_PIPELINE_LINEAR_ALGORITHMS;
+  enum { N_OTHERS = sizeof others / sizeof *others };
+  int nf = model->n_faces;
+  size_t ne = hoc_mesh_num_elements(*lin), count[4], left;
+  unsigned char *kind = NULL;
+  size_t *on_cad = NULL, *elems = NULL, *best = NULL, *t_on_cad = NULL, *t_elems = NULL;
+  int *choice = NULL, *tried = NULL, *held = NULL;
+  hoc_mesh *trial = NULL;
+  hoc_status status = HOC_OK;
+  char faces[320];
+  if (!ne) return HOC_OK;
+  HOC_ALLOC_GOTO(kind, ne, done);
+  HOC_ALLOC_GOTO(on_cad, (size_t)nf + 1, done);
+  HOC_ALLOC_GOTO(elems, (size_t)nf + 1, done);
+  HOC_TRY_GOTO(linear_kinds(run, *lin, kind, on_cad, elems, count), done);
+  if (count[HOC_INVERTED_ACROSS_FOLD]) {
+    HOC_TRY_GOTO(kind_faces(*lin, kind, HOC_INVERTED_ACROSS_FOLD, faces, sizeof faces), done);
+    HOC_TRY_GOTO(hoc_run_event(run, HOC_EVENT_NOTE,
+                               "%zu linear element(s) cross a fold of their face, where its "
+                               "normal phi_u x phi_v reverses (no straight triangle across it "
+                               "is valid): faces%s",
+                               count[HOC_INVERTED_ACROSS_FOLD], faces),
+                 done);
+  }
+  if (!count[HOC_INVERTED_ON_CAD]) goto done;
+  HOC_TRY_GOTO(kind_faces(*lin, kind, HOC_INVERTED_ON_CAD, faces, sizeof faces), done);
+  HOC_TRY_GOTO(hoc_run_event(run, HOC_EVENT_REPAIR,
+                             "%zu linear element(s) inverted on the CAD: meshing their faces "
+                             "again with gmsh's MeshAdapt and Delaunay algorithms (per face, "
+                             "the mesh with the fewest is kept): faces%s",
+                             count[HOC_INVERTED_ON_CAD], faces),
+               done);
+  HOC_ALLOC_GOTO(best, (size_t)nf + 1, done);
+  HOC_ALLOC_GOTO(t_on_cad, (size_t)nf + 1, done);
+  HOC_ALLOC_GOTO(t_elems, (size_t)nf + 1, done);
+  HOC_ALLOC_GOTO(choice, (size_t)nf + 1, done);
+  HOC_ALLOC_GOTO(tried, (size_t)nf + 1, done);
+  HOC_ALLOC_GOTO(held, (size_t)nf + 1, done); /* the algorithms *lin was meshed with */
+  for (int f = 0; f < nf; ++f)
+    best[f] = on_cad[f];
+  left = count[HOC_INVERTED_ON_CAD];
+  for (int a = 0; a < N_OTHERS && left; ++a) {
+    for (int f = 0; f < nf; ++f)
+      tried[f] = best[f] ? others[a] : choice[f];
+    size_t te = 0;
+    hoc_status s = hoc_mesh_generate_linear_with(model, lo, tried, &trial);
+    if (s == HOC_OK) {
+      te = hoc_mesh_num_elements(trial);
+      unsigned char *tk = hoc_calloc(te ? te : 1, 1);
+      s = tk ? linear_kinds(run, trial, tk, t_on_cad, t_elems, count)
+             : HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
+      free(tk);
+    }
+    if (s == HOC_ERR_INTERRUPTED || s == HOC_ERR_MEMORY) {
+      status = s;
+      goto done;
+    }
+    if (s != HOC_OK) { /* gmsh could not: the faces keep their meshes */
+      hoc_mesh_destroy(&trial);
+      HOC_TRY_GOTO(hoc_run_event(run, HOC_EVENT_NOTE, "gmsh's %s algorithm failed: %s",
+                                 algorithm_name(others[a]), hoc_last_error()),
+                   done);
+      continue;
+    }
+    /* a face meshed anew keeps the new mesh only with fewer inverted
+     * elements and some elements (a face left empty has none) */
+    int same = 1;
+    for (int f = 0; f < nf; ++f) {
+      if (tried[f] != choice[f] && t_elems[f] && t_on_cad[f] < best[f]) {
+        left -= best[f] - t_on_cad[f];
+        best[f] = t_on_cad[f];
+        choice[f] = tried[f];
+      }
+      same = same && tried[f] == choice[f];
+    }
+    if (same) { /* the trial is the mesh of the choices so far */
+      hoc_mesh_destroy(lin);
+      *lin = trial;
+      trial = NULL;
+      memcpy(held, choice, (size_t)nf * sizeof *held);
+    }
+    hoc_mesh_destroy(&trial);
+  }
+  int held_choice = 1;
+  for (int f = 0; f < nf; ++f)
+    held_choice = held_choice && held[f] == choice[f];
+  if (!held_choice) {
+    HOC_TRY_GOTO(hoc_mesh_generate_linear_with(model, lo, choice, &trial), done);
+    hoc_mesh_destroy(lin);
+    *lin = trial;
+    trial = NULL;
+  }
+  {
+    char text[400];
+    size_t len = 0;
+    text[0] = '\0';
+    for (int f = 0; f < nf && len < sizeof text; ++f)
+      if (choice[f])
+        len += (size_t)snprintf(text + len, sizeof text - len, "%sface %d with %s (%zu -> %zu)",
+                                len ? ", " : "", model->faces[f].tag, algorithm_name(choice[f]),
+                                on_cad[f], best[f]);
+    if (len)
+      HOC_TRY_GOTO(hoc_run_event(run, HOC_EVENT_NOTE,
+                                 "meshed again: %s; %zu linear element(s) inverted on the CAD "
+                                 "left",
+                                 text, left),
+                   done);
+    else
+      HOC_TRY_GOTO(hoc_run_event(run, HOC_EVENT_NOTE,
+                                 "gmsh's other algorithms left no fewer inverted elements: kept "
+                                 "the mesh"),
+                   done);
+  }
+done:
+  hoc_mesh_destroy(&trial);
+  free(kind);
+  free(on_cad);
+  free(elems);
+  free(best);
+  free(t_on_cad);
+  free(t_elems);
+  free(choice);
+  free(tried);
+  free(held);
+  return status;
+}
+
+hoc_status hoc_repair_tangled_on_folds(const hoc_run *run, const hoc_mesh *mesh, int *all) {
+  *all = 0;
+  size_t ne = hoc_mesh_num_elements(mesh);
+  int nf = mesh->model->n_faces;
+  unsigned char *tangled = NULL, *state = NULL; /* per face: 1 tangled, 2 and folds */
+  hoc_status status = HOC_OK;
+  HOC_ALLOC_GOTO(tangled, ne, done);
+  HOC_ALLOC_GOTO(state, (size_t)nf + 1, done);
+  HOC_TRY_GOTO(hoc_mesh_measure(mesh, run->o.measure, NULL, tangled, NULL), done);
+  int any = 0;
+  for (size_t e = 0; e < ne; ++e)
+    if (tangled[e]) any = state[mesh->elem_face[e]] = 1;
+  for (size_t e = 0; e < ne; ++e) {
+    int f = mesh->elem_face[e], folds = 0;
+    if (state[f] != 1) continue;
+    HOC_TRY_GOTO(hoc_mesh_element_folds(mesh, e, &folds), done);
+    if (folds) state[f] = 2;
+  }
+  *all = any;
+  for (int f = 0; f < nf; ++f)
+    if (state[f] == 1) *all = 0;
+done:
+  free(tangled);
+  free(state);
   return status;
 }

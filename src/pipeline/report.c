@@ -1,6 +1,7 @@
 /* The pipelines' report: its stages, what it finds about the result (the
  * tangled elements and why, elements at CAD cusps) and its JSON.
  * SPDX-License-Identifier: GPL-2.0-or-later */
+#include "mesh/mesh.h"
 #include "pipeline/pipeline.h"
 
 #include <stdarg.h>
@@ -199,6 +200,17 @@ static hoc_status find_tangled(hoc_report *report, const hoc_mesh *mesh, const d
       ++shown;
     }
   text_add(&t, "%s", total > shown ? " ..." : "");
+  /* elements across a fold of their face: no finer mesh avoids those */
+  size_t across = 0;
+  for (size_t e = 0; e < ne; ++e) {
+    int folds = 0;
+    if (q[e] == 0.0 && hoc_mesh_element_folds(mesh, e, &folds) == HOC_OK) across += folds;
+  }
+  if (across)
+    text_add(&t,
+             "; %zu of them cross a fold of their face, where its normal phi_u x phi_v "
+             "reverses, which every mesh of that face crosses",
+             across);
   return add_finding(report, HOC_EVENT_WARNING, &t);
 }
 

@@ -1,0 +1,144 @@
+/* Why an order-1 element is tangled: inverted on the surface (across a
+ * fold of the face, or not), or valid once the face's normal at a
+ * singular corner is taken along the element.
+ * SPDX-License-Identifier: GPL-2.0-or-later
+ *
+ * A straight triangle is valid when its normal t = (x1 - x0) x (x2 - x0)
+ * points to the side of the face's normal at each corner (sigma, the
+ * interpolated normal's component along t, is linear and smallest at a
+ * corner). The measure takes each corner's normal from its slot: one
+ * normal per node and face. Where phi_u x phi_v vanishes (a pole, a cone's
+ * apex, a B-spline corner whose side collapses), the normal's limit
+ * depends on the direction from which the point is approached, and the
+ * slot's one normal, taken just inside the face towards its middle, is
+ * not the limit along every element around the point. */
+#include "mesh/mesh.h"
+
+#include <math.h>
+
+static void cross(const double *a, const double *b, double *c) {
+  c[0] = a[1] * b[2] - a[2] * b[1];
+  c[1] = a[2] * b[0] - a[0] * b[2];
+  c[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+static double dot(const double *a, const double *b) {
+  return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+/* Fraction of the way from a singular corner to the element's centroid
+ * (in the face's parameters) at which its normal is taken: close enough
+ * to be the limit along the element, far enough from the singular point
+ * for phi_u x phi_v to be well above rounding. */
+#define ALONG_ELEMENT 1e-4
+
+/* The face's normal (unnormalised, oriented as the mesh) at corner k of
+ * order-1 element e, as the limit along the element where phi_u x phi_v
+ * vanishes at the corner (the criterion of the slot normals). */
+static hoc_status corner_normal(const hoc_mesh *m, size_t e, int k, double *n) {
+  int f = m->elem_face[e];
+  const double *uv = m->elem_uv + 6 * e;
+  double du[3], dv[3];
+  HOC_TRY(hoc_cad_face_eval(m->model, f, 1, uv + 2 * k, NULL, du, dv));
+  cross(du, dv, n);
+  if (!(sqrt(dot(n, n)) > 1e-10 * (dot(du, du) + dot(dv, dv)))) {
+    double p[2];
+    for (int d = 0; d < 2; ++d) {
+      double centroid = (uv[d] + uv[2 + d] + uv[4 + d]) / 3;
+      p[d] = uv[2 * k + d] + ALONG_ELEMENT * (centroid - uv[2 * k + d]);
+    }
+    HOC_TRY(hoc_cad_face_eval(m->model, f, 1, p, NULL, du, dv));
+    cross(du, dv, n);
+  }
+  double sign = m->face_orient[f] < 0 ? -1.0 : 1.0;
+  for (int d = 0; d < 3; ++d)
+    n[d] *= sign;
+  return HOC_OK;
+}
+
+/* Lattice points per side of an element's (u, v) triangle at which the
+ * fold test samples the face's normal: neighbours 1/8 of the element
+ * apart. A smooth face turns its normal by more than a right angle over
+ * that distance only where it is at least eight times too curved for the
+ * element, and a fold reverses it at once. */
+#define FOLD_SAMPLES 8
+
+hoc_status hoc_mesh_element_folds(const hoc_mesh *mesh, size_t e, int *folds) {
+  HOC_CHECK(mesh && folds && e < mesh->n_elems, HOC_ERR_ARGUMENT, "fold test: bad argument");
+  enum { N = FOLD_SAMPLES, POINTS = (N + 1) * (N + 2) / 2 };
+  int f = mesh->elem_face[e];
+  const double *c = mesh->elem_uv + 2 * (size_t)mesh->np * e; /* corners first */
+  double uv[2 * POINTS], du[3 * POINTS], dv[3 * POINTS], n[3 * POINTS];
+  int regular[POINTS], at[N + 1][N + 1];
+  int k = 0;
+  for (int i = 0; i <= N; ++i)
+    for (int j = 0; i + j <= N; ++j, ++k) {
+      double a = (double)i / N, b = (double)j / N;
+      for (int d = 0; d < 2; ++d)
+        uv[2 * k + d] = (1 - a - b) * c[d] + a * c[2 + d] + b * c[4 + d];
+      at[i][j] = k;
+    }
+  /* a corner where phi_u x phi_v vanishes: the limit along the element
+   * (a fold next to a collapsed side lies between it and the next sample) */
+  for (int corner = 0; corner < 3; ++corner) {
+    double centroid[2], *p = uv + 2 * at[corner == 1 ? N : 0][corner == 2 ? N : 0];
+    for (int d = 0; d < 2; ++d)
+      centroid[d] = (c[d] + c[2 + d] + c[4 + d]) / 3;
+    double dd[6], m[3];
+    HOC_TRY(hoc_cad_face_eval(mesh->model, f, 1, p, NULL, dd, dd + 3));
+    cross(dd, dd + 3, m);
+    if (sqrt(dot(m, m)) > 1e-10 * (dot(dd, dd) + dot(dd + 3, dd + 3))) continue;
+    for (int d = 0; d < 2; ++d)
+      p[d] += ALONG_ELEMENT * (centroid[d] - p[d]);
+  }
+  HOC_TRY(hoc_cad_face_eval(mesh->model, f, POINTS, uv, NULL, du, dv));
+  for (k = 0; k < POINTS; ++k) {
+    cross(du + 3 * k, dv + 3 * k, n + 3 * k);
+    /* where phi_u x phi_v vanishes (a pole, a collapsed side) its sign
+     * is rounding: no sample */
+    regular[k] = sqrt(dot(n + 3 * k, n + 3 * k)) >
+                 1e-10 * (dot(du + 3 * k, du + 3 * k) + dot(dv + 3 * k, dv + 3 * k));
+  }
+  *folds = 0;
+  for (int i = 0; i <= N && !*folds; ++i)
+    for (int j = 0; i + j <= N && !*folds; ++j) {
+      /* the lattice's three edge directions from (i, j) */
+      int p = at[i][j], q[3] = {i + j < N ? at[i + 1][j] : -1, i + j < N ? at[i][j + 1] : -1,
+                                j > 0 ? at[i + 1][j - 1] : -1};
+      for (int m = 0; m < 3 && !*folds; ++m)
+        *folds = q[m] >= 0 && regular[p] && regular[q[m]] && dot(n + 3 * p, n + 3 * q[m]) < 0;
+    }
+  return HOC_OK;
+}
+
+hoc_status hoc_mesh_inverted_kinds(const hoc_mesh *mesh, const unsigned char *tangled,
+                                   unsigned char *kind) {
+  HOC_CHECK(mesh && tangled && kind, HOC_ERR_ARGUMENT, "NULL argument");
+  HOC_CHECK(mesh->order == 1, HOC_ERR_ARGUMENT,
+            "inverted triangles are told apart on order-1 meshes, not order %d", mesh->order);
+  for (size_t e = 0; e < mesh->n_elems; ++e) {
+    kind[e] = HOC_INVERTED_NONE;
+    if (!tangled[e]) continue;
+    const size_t *cn = mesh->conn + 3 * e;
+    const double *x0 = mesh->xyz + 3 * cn[0], *x1 = mesh->xyz + 3 * cn[1],
+                 *x2 = mesh->xyz + 3 * cn[2];
+    double a[3], b[3], t[3];
+    for (int d = 0; d < 3; ++d) {
+      a[d] = x1[d] - x0[d];
+      b[d] = x2[d] - x0[d];
+    }
+    cross(a, b, t);
+    int valid = 1;
+    for (int k = 0; k < 3 && valid; ++k) {
+      double n[3];
+      HOC_TRY(corner_normal(mesh, e, k, n));
+      valid = dot(t, n) > 0;
+    }
+    int folds = 0;
+    if (!valid) HOC_TRY(hoc_mesh_element_folds(mesh, e, &folds));
+    kind[e] = valid   ? HOC_INVERTED_AT_SINGULAR
+              : folds ? HOC_INVERTED_ACROSS_FOLD
+                      : HOC_INVERTED_ON_CAD;
+  }
+  return HOC_OK;
+}

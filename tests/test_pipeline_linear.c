@@ -1,0 +1,175 @@
+/* Inverted linear triangles (the pipeline's hoc_repair_linear) and faces
+ * that fold (hoc_mesh_element_folds).
+ *
+ * t106_blade_face.brep: gmsh 4.8's default (Frontal-Delaunay) mesh of this
+ * B-spline blade face at edges up to 46 has straight triangles inverted on
+ * the CAD, on a face that does not fold; hoc_mesh_model meshes the face
+ * again with MeshAdapt and its linear stage has none.
+ *
+ * surf114_face1.brep: a spline patch whose normal reverses along a curve
+ * near each end of u (phi_v changes sign there): every mesh of it has
+ * elements across those folds, which hoc_mesh_model names and, when they
+ * stay tangled, splits instead of meshing the face again finer.
+ * SPDX-License-Identifier: GPL-2.0-or-later */
+#include "hocad.h"
+#include "mesh/mesh.h"
+#include "test_util.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define DATA HOC_SOURCE_DIR "/tests/data/"
+
+/* The edge bound at which gmsh inverts triangles of the blade face (the
+ * whole T106 model's default: its bounding-box diagonal / 20). */
+#define BLADE_SIZE 46.0
+
+typedef struct seen {
+  int repair_inverted, meshed_again, fold_note, fold_split, remeshed;
+} seen;
+
+static int on_event(void *user, const hoc_event *ev) {
+  seen *s = user;
+  if (!ev->message) return 0;
+  if (ev->kind == HOC_EVENT_REPAIR && strstr(ev->message, "inverted on the CAD"))
+    s->repair_inverted++;
+  if (ev->kind == HOC_EVENT_NOTE && strstr(ev->message, "meshed again: face 1 with MeshAdapt"))
+    s->meshed_again++;
+  if (ev->kind == HOC_EVENT_NOTE && strstr(ev->message, "cross a fold of their face"))
+    s->fold_note++;
+  if (ev->kind == HOC_EVENT_REPAIR && strstr(ev->message, "on faces that fold")) s->fold_split++;
+  if (ev->kind == HOC_EVENT_REPAIR && strstr(ev->message, "with edges half as long")) s->remeshed++;
+  return 0;
+}
+
+/* Elements of each hoc_inverted_kind in an order-1 mesh. */
+static void count_kinds(const hoc_mesh *mesh, size_t count[4]) {
+  size_t ne = hoc_mesh_num_elements(mesh);
+  unsigned char *tangled = calloc(ne, 1), *kind = calloc(ne, 1);
+  for (int k = 0; k < 4; ++k)
+    count[k] = 0;
+  CHECK(tangled && kind);
+  if (tangled && kind) {
+    CHECK_OK(hoc_mesh_measure(mesh, HOC_MEASURE_SHAPE, NULL, tangled, NULL));
+    CHECK_OK(hoc_mesh_inverted_kinds(mesh, tangled, kind));
+    for (size_t e = 0; e < ne; ++e)
+      count[kind[e]]++;
+  }
+  free(tangled);
+  free(kind);
+}
+
+static size_t count_folds(const hoc_mesh *mesh) {
+  size_t n = 0;
+  for (size_t e = 0; e < hoc_mesh_num_elements(mesh); ++e) {
+    int folds = -1;
+    CHECK_OK(hoc_mesh_element_folds(mesh, e, &folds));
+    n += folds == 1;
+  }
+  return n;
+}
+
+static void test_blade(void) {
+  hoc_model *model = NULL;
+  CHECK_OK(hoc_model_open(DATA "t106_blade_face.brep", &model));
+  if (!model) return;
+  /* gmsh's own mesh: inverted triangles, none across a fold */
+  hoc_linear_options lo;
+  hoc_linear_options_default(&lo);
+  lo.size_max = BLADE_SIZE;
+  lo.order = 2;
+  hoc_mesh *lin = NULL;
+  CHECK_OK(hoc_mesh_generate_linear(model, &lo, &lin));
+  size_t count[4];
+  if (lin) {
+    count_kinds(lin, count);
+    printf("blade, gmsh's default algorithm: %zu elements, %zu inverted on the CAD, %zu across "
+           "a fold\n",
+           hoc_mesh_num_elements(lin), count[HOC_INVERTED_ON_CAD], count[HOC_INVERTED_ACROSS_FOLD]);
+    CHECK(count[HOC_INVERTED_ON_CAD] > 0);
+    CHECK(count[HOC_INVERTED_ACROSS_FOLD] == 0);
+    CHECK(count_folds(lin) == 0);
+  }
+  hoc_mesh_destroy(&lin);
+  /* an algorithm out of gmsh's range is refused */
+  int bad = 99;
+  CHECK_STATUS(hoc_mesh_generate_linear_with(model, &lo, &bad, &lin), HOC_ERR_ARGUMENT);
+  CHECK(lin == NULL);
+
+  /* the pipeline meshes the face again: no inverted triangle is left */
+  seen s = {0};
+  hoc_mesh_options o;
+  hoc_mesh_options_default(&o);
+  o.order = 2;
+  o.optimize = 0;
+  o.size = BLADE_SIZE;
+  o.event = on_event;
+  o.event_user = &s;
+  hoc_mesh *mesh = NULL;
+  hoc_report *r = NULL;
+  CHECK_OK(hoc_mesh_model(model, &o, &mesh, &r));
+  if (r) {
+    const hoc_stage *linear = hoc_report_stage(r, 0);
+    CHECK(linear && !strcmp(linear->name, "linear"));
+    if (linear) {
+      printf("blade, hoc_mesh_model: linear stage %zu elements, %zu tangled, min q %.4f\n",
+             linear->stats.elements, linear->stats.tangled, linear->stats.min);
+      CHECK(linear->stats.tangled == 0 && linear->stats.min > 0);
+    }
+  }
+  CHECK(s.repair_inverted == 1 && s.meshed_again == 1 && s.fold_note == 0);
+  hoc_report_destroy(&r);
+  hoc_mesh_destroy(&mesh);
+  hoc_model_destroy(&model);
+}
+
+static void test_folded_face(void) {
+  hoc_model *model = NULL;
+  CHECK_OK(hoc_model_open(DATA "surf114_face1.brep", &model));
+  if (!model) return;
+  hoc_linear_options lo;
+  hoc_linear_options_default(&lo);
+  lo.order = 2;
+  hoc_mesh *lin = NULL;
+  CHECK_OK(hoc_mesh_generate_linear(model, &lo, &lin));
+  size_t count[4], folds = 0;
+  if (lin) {
+    count_kinds(lin, count);
+    folds = count_folds(lin);
+    printf("folded face: %zu elements, %zu across a fold (%zu inverted there), %zu inverted "
+           "elsewhere\n",
+           hoc_mesh_num_elements(lin), folds, count[HOC_INVERTED_ACROSS_FOLD],
+           count[HOC_INVERTED_ON_CAD]);
+    CHECK(count[HOC_INVERTED_ACROSS_FOLD] > 0 && folds >= count[HOC_INVERTED_ACROSS_FOLD]);
+  }
+  hoc_mesh_destroy(&lin);
+
+  seen s = {0};
+  hoc_mesh_options o;
+  hoc_mesh_options_default(&o);
+  o.order = 2;
+  o.max_iterations = 10;
+  o.refinements = 1;
+  o.event = on_event;
+  o.event_user = &s;
+  hoc_mesh *mesh = NULL;
+  hoc_report *r = NULL;
+  CHECK_OK(hoc_mesh_model(model, &o, &mesh, &r));
+  printf("folded face, hoc_mesh_model at order 2: %zu tangled, %d refinements, %d remeshings\n",
+         r ? hoc_report_tangled(r) : 0, r ? hoc_report_refinements(r) : -1,
+         r ? hoc_report_remeshings(r) : -1);
+  CHECK(s.fold_note == 1);
+  /* tangled elements on the folded face are split, never meshed again */
+  if (r && hoc_report_tangled(r)) CHECK(s.fold_split == 1);
+  CHECK(s.remeshed == 0 && r && hoc_report_remeshings(r) == 0);
+  hoc_report_destroy(&r);
+  hoc_mesh_destroy(&mesh);
+  hoc_model_destroy(&model);
+}
+
+int main(void) {
+  test_blade();
+  test_folded_face();
+  return test_report();
+}
