@@ -4,7 +4,7 @@
  * nodes and JSON agree with the mesh returned; a given linear mesh (the
  * mesher's own) gives the same mesh bit for bit; keep_stages keeps the
  * linear and raised meshes; Fekete nodes are written equispaced with a
- * "written" stage.
+ * "written" stage; from order 6 the optimisation starts at order 3.
  * SPDX-License-Identifier: GPL-2.0-or-later */
 #include "hocad.h"
 #include "test_util.h"
@@ -186,6 +186,40 @@ static void test_written(hoc_model *model) {
   hoc_mesh_destroy(&mesh);
 }
 
+/* From HOC_PIPELINE_COARSE_FROM (order 6) on, the optimisation starts
+ * from the optimised order-3 mesh raised to the order asked: stages
+ * "coarse" (order 3, optimised) and "re-raised" (order 6) come between the
+ * direct raise and the optimised mesh, which is valid and keeps the
+ * quality bound. */
+static void test_coarse_start(hoc_model *model) {
+  hoc_mesh_options o;
+  hoc_mesh_options_default(&o);
+  o.order = 6;
+  hoc_mesh *mesh = NULL;
+  hoc_report *r = NULL;
+  CHECK_OK(hoc_mesh_model(model, &o, &mesh, &r));
+  if (!mesh || !r) goto done;
+  static const char *names[5] = {"linear", "high-order", "coarse", "re-raised", "optimized"};
+  static const int orders[5] = {1, 6, 3, 6, 6};
+  CHECK(hoc_report_num_stages(r) == 5);
+  for (size_t i = 0; i < hoc_report_num_stages(r) && i < 5; ++i) {
+    const hoc_stage *s = hoc_report_stage(r, i);
+    CHECK(!strcmp(s->name, names[i]));
+    CHECK(s->stats.order == orders[i]);
+    CHECK(s->optimized == (i == 2 || i == 4));
+  }
+  const hoc_stage *lin = hoc_report_stage(r, 0), *fin = hoc_report_stage(r, 4);
+  if (lin && fin) {
+    CHECK(fin->stats.tangled == 0);
+    CHECK(fin->stats.min >= 0.9 * lin->stats.min);
+    printf("order 6 from order 3: min q %.4f (linear %.4f), mean %.4f\n", fin->stats.min,
+           lin->stats.min, fin->stats.mean);
+  }
+done:
+  hoc_report_destroy(&r);
+  hoc_mesh_destroy(&mesh);
+}
+
 int main(void) {
   hoc_model *model = open_bundled("gmsh_t20_component8.step");
   if (model) {
@@ -194,7 +228,10 @@ int main(void) {
   }
   hoc_model_destroy(&model);
   /* one model opened from a file at a time */
-  if ((model = open_bundled("screw.step"))) test_written(model);
+  if ((model = open_bundled("screw.step"))) {
+    test_written(model);
+    test_coarse_start(model);
+  }
   hoc_model_destroy(&model);
   return test_report();
 }

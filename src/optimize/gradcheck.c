@@ -37,7 +37,7 @@ static hoc_status block_f_at(hoc_opt *o, size_t b, int dof, double h, hoc_opt_sc
   for (size_t a = o->B->be_start[b]; a < o->B->be_start[b + 1]; ++a) {
     size_t e = o->B->be_elem[a];
     hoc_opt_gather(o, e, s->x, s->n);
-    int nr = hoc_opt_elem_residuals(o, e, s->x, s->n, NULL, s->r, NULL, NULL);
+    int nr = hoc_opt_elem_residuals(o, e, s->x, s->n, NULL, NULL, s->r, NULL, NULL);
     for (int q = 0; q < nr; ++q) *f += s->r[q] * s->r[q];
   }
   hoc_opt_set_moving(o, b, 0);

@@ -13,8 +13,58 @@
 #include <stdlib.h>
 #include <string.h>
 
+enum { NP_MAX = (HOC_MAX_ORDER + 1) * (HOC_MAX_ORDER + 2) / 2 };
+
 /* Positions and normals of element e's nodes: the trial state of nodes
  * flagged `moving`, else the current one. */
+void hoc_opt_frames_trial(const hoc_opt *o, size_t e, const double *fr, double *out) {
+  const hoc_mesh *m = o->m;
+  size_t np = (size_t)o->np;
+  const size_t *cn = m->conn + e * np, *sl = m->elem_slot + e * np;
+  size_t moving = 0;
+  for (size_t i = 0; i < np; ++i) moving += o->node.moving[cn[i]];
+  if (4 * moving > np) {
+    /* most of its nodes move (a vertex carrying its star): the frames from
+     * the trial's nodes cost no more than moving them node by node */
+    double x[3 * NP_MAX], n[3 * NP_MAX];
+    hoc_opt_gather(o, e, x, n);
+    hoc_element_frames(o->t, x, n, out);
+    return;
+  }
+  const double *from = fr;
+  for (size_t i = 0; i < np; ++i) {
+    if (!o->node.moving[cn[i]]) continue;
+    double dx[3], dn[3];
+    for (int c = 0; c < 3; ++c) {
+      dx[c] = o->trial.txyz[3 * cn[i] + c] - m->xyz[3 * cn[i] + c];
+      dn[c] = o->trial.tnormal[3 * sl[i] + c] - o->node.normal[3 * sl[i] + c];
+    }
+    hoc_element_frames_move(o->t, from, (int)i, dx, dn, out);
+    from = out;
+  }
+  if (from != out) memcpy(out, fr, 9 * (size_t)o->fc.npts * sizeof *out);
+}
+
+hoc_status hoc_opt_frames_setup(hoc_opt *o) {
+  size_t ne = o->m->n_elems;
+  o->fc.npts = hoc_element_frame_points(o->t);
+  size_t per = 9 * (size_t)o->fc.npts * sizeof(double);
+  size_t want = 0;
+  for (size_t e = 0; e < ne; ++e) want += !o->adj.touched || o->adj.touched[e];
+  o->fc.cap = o->m->order >= HOC_OPT_FRAME_MIN_ORDER ? HOC_OPT_FRAME_POOL_BYTES / per : 0;
+  if (o->fc.cap > want) o->fc.cap = want;
+  HOC_ALLOC(o->fc.slot, ne + 1);
+  if (o->fc.cap) {
+    o->fc.pool = hoc_realloc(NULL, o->fc.cap * 9 * (size_t)o->fc.npts, sizeof *o->fc.pool);
+    if (!o->fc.pool) o->fc.cap = 0; /* (not kept: every evaluation from the nodes) */
+  }
+  /* the elements a free node can change, in element order, as many as fit */
+  size_t k = 0;
+  for (size_t e = 0; e < ne; ++e)
+    o->fc.slot[e] = k < o->fc.cap && (!o->adj.touched || o->adj.touched[e]) ? k++ : SIZE_MAX;
+  return HOC_OK;
+}
+
 void hoc_opt_gather(const hoc_opt *o, size_t e, double *x, double *n) {
   const hoc_mesh *m = o->m;
   size_t np = (size_t)o->np;
@@ -89,9 +139,11 @@ static void sigma_stats(const hoc_opt *o, const double *x, const double *n, doub
  * J: [nq + np + nv + 1][np][3] or NULL. Returns the count and sets
  * *smin to the smallest sigma / |D phi|^2 over the quadrature points. */
 int hoc_opt_elem_residuals(const hoc_opt *o, size_t e, const double *x, const double *n,
-                          const unsigned char *need, double *r, double *J, double *smin) {
+                           const double *fr, const unsigned char *need, double *r, double *J,
+                           double *smin) {
   int nq = o->nq, np = o->np;
-  double s = hoc_element_residuals(o->t, o->measure, x, n, o->el.delta[e], need, r, J);
+  double s = fr ? hoc_element_residuals_frames(o->t, o->measure, fr, o->el.delta[e], need, r, J)
+                : hoc_element_residuals(o->t, o->measure, x, n, o->el.delta[e], need, r, J);
   if (smin) *smin = s;
   if (!o->el.region[e]) return nq;
   hoc_element_node_residuals(o->t, o->measure, x, n, o->el.delta[e], o->cfg.exact, need, r + nq,
@@ -126,6 +178,8 @@ hoc_status hoc_opt_sweep_start(hoc_opt *o, double *objective, double *min_q, siz
     for (size_t e = 0; e < ne; ++e) {
       if (!x || !o->el.dirty[e]) continue;
       hoc_opt_gather(o, e, x, n);
+      double *fr = hoc_opt_frames_of(o, e);
+      if (fr) hoc_element_frames(o->t, x, n, fr);
       double eta;
       qe[e] = hoc_element_quality_test(o->t, o->measure, x, n, o->cfg.exact, &eta, NULL);
       o->el.valid[e] = qe[e] > 0;
@@ -179,7 +233,7 @@ hoc_status hoc_opt_sweep_start(hoc_opt *o, double *objective, double *min_q, siz
       if (!x || !(o->el.dirty[e] || o->el.region[e] || o->el.was_region[e])) continue;
       hoc_opt_gather(o, e, x, n);
       double f = 0;
-      int nr = hoc_opt_elem_residuals(o, e, x, n, NULL, r, NULL, NULL);
+      int nr = hoc_opt_elem_residuals(o, e, x, n, hoc_opt_frames_of(o, e), NULL, r, NULL, NULL);
       for (int q = 0; q < nr; ++q) f += r[q] * r[q];
       fe[e] = f;
     }
@@ -232,7 +286,7 @@ hoc_status hoc_opt_screen(hoc_opt *o) {
       const size_t *cn = m->conn + e * np;
       for (size_t i = 0; i < np; ++i) need[i] = o->adj.ndof[cn[i]] > 0;
       hoc_opt_gather(o, e, x, n);
-      int nr = hoc_opt_elem_residuals(o, e, x, n, need, r, J, NULL);
+      int nr = hoc_opt_elem_residuals(o, e, x, n, hoc_opt_frames_of(o, e), need, r, J, NULL);
       for (size_t i = 0; i < np; ++i) {
         const double *dz = o->node.dz + 6 * cn[i];
         double c[5] = {0, 0, 0, 0, 0};

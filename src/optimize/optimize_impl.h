@@ -51,6 +51,7 @@
 #include "quality/quality.h"
 
 #include <stddef.h>
+#include <stdint.h>
 
 /* A family of blocks: each block a set of free nodes updated together. */
 typedef struct hoc_opt_blockset {
@@ -154,6 +155,20 @@ typedef struct hoc_opt_trial {
   double *tnormal;      /* [n_slots][3] */
 } hoc_opt_trial;
 
+/* Frames of elements (hoc_element_frames: D phi's columns and the
+ * interpolated normal at every sample point), kept between the evaluations
+ * of a sweep: a block's model reads them instead of recomputing them from
+ * every node of the element, and an accepted step moves them by its nodes'
+ * changes only. So a single node's visit costs in proportion to the points
+ * of its elements (p^2), not to points times nodes (p^4). Refreshed from
+ * the nodes at every sweep's start for the elements that moved. */
+typedef struct hoc_opt_frames {
+  int npts;       /* points per element (hoc_element_frame_points) */
+  size_t cap;     /* elements the pool holds */
+  size_t *slot;   /* [n_elems] the element's place in the pool, SIZE_MAX if not kept */
+  double *pool;   /* [cap][9][npts] */
+} hoc_opt_frames;
+
 /* The optimiser's state. */
 typedef struct hoc_opt {
   hoc_mesh *m;
@@ -165,14 +180,17 @@ typedef struct hoc_opt {
   hoc_opt_blockset fam[2]; /* 0: vertices (with carried stars), edges, interiors; 1: single nodes */
   hoc_opt_blockset *B;     /* the family being swept */
   int max_nd;              /* most unknowns in a block of either family */
+  size_t max_foot;         /* most elements a block of either family touches */
   hoc_opt_elements el;
   hoc_opt_nodes node;
   hoc_opt_settings cfg;
   hoc_opt_trial trial;
+  hoc_opt_frames fc;
 } hoc_opt;
 
 typedef struct hoc_opt_scratch {
   double *x, *n, *r, *J, *uv, *Jz, *H, *g, *L;
+  double *fr;        /* [max_foot][9][npts] trial frames of a block's elements */
   double *w;         /* [np] hoc_opt_block_model: a node's weight in the block, */
   int *off;          /* its first unknown, */
   unsigned char *nd; /* and its unknowns (0: not moved by the block) */
@@ -249,9 +267,21 @@ size_t hoc_opt_select_active(hoc_opt *o, int color);
 void hoc_opt_gather(const hoc_opt *o, size_t e, double *x, double *n);
 /* Element e not folded in (u, v) (trial state of moving nodes); uv[np][2] scratch. */
 int hoc_opt_param_valid(const hoc_opt *o, size_t e, double *uv);
-/* Residuals r (and their Jacobian J if not NULL) of element e; their number. */
+/* Residuals r (and their Jacobian J if not NULL) of element e; their number.
+ * fr: the element's frames (quadrature points from them), or NULL (from x, n). */
 int hoc_opt_elem_residuals(const hoc_opt *o, size_t e, const double *x, const double *n,
-                           const unsigned char *need, double *r, double *J, double *smin);
+                           const double *fr, const unsigned char *need, double *r, double *J,
+                           double *smin);
+/* The kept frames of element e, or NULL. */
+static inline double *hoc_opt_frames_of(const hoc_opt *o, size_t e) {
+  size_t k = o->fc.slot ? o->fc.slot[e] : SIZE_MAX;
+  return k == SIZE_MAX ? NULL : o->fc.pool + k * 9 * (size_t)o->fc.npts;
+}
+/* Frames of element e in the trial state of moving nodes, from its kept
+ * frames fr, into out (which may be fr). */
+void hoc_opt_frames_trial(const hoc_opt *o, size_t e, const double *fr, double *out);
+/* The frame pool and which elements it keeps (setup). */
+hoc_status hoc_opt_frames_setup(hoc_opt *o);
 /* Per-element state at a sweep's start; f, smallest q and tangled count. */
 hoc_status hoc_opt_sweep_start(hoc_opt *o, double *objective, double *min_q, size_t *tangled);
 /* Puts nodes with nothing to gain to sleep (before the first sweep). */

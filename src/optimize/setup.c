@@ -31,7 +31,7 @@ void hoc_opt_free(hoc_opt *o) {
       o->trial.f0,        o->trial.fnew,   o->trial.slope,  o->trial.state,     o->trial.list,
       o->trial.committed, o->trial.tpar,   o->trial.txyz,   o->trial.tdz,       o->trial.tslot_uv,
       o->trial.tnormal,   o->el.xvalid,    o->node.near,    o->el.near_e,       o->adj.touched,
-      o->el.has_fold,     o->el.fold_rs,   o->el.fragile};
+      o->el.has_fold,     o->el.fold_rs,   o->el.fragile,   o->fc.slot,         o->fc.pool};
   for (size_t i = 0; i < sizeof p / sizeof *p; ++i) free(p[i]);
 }
 
@@ -198,7 +198,12 @@ hoc_status hoc_opt_setup(hoc_opt *o, hoc_mesh *m, hoc_measure measure, int fix_c
       h = fmax(h, dist3(m->xyz + 3 * cn[k], m->xyz + 3 * cn[(k + 1) % 3]));
     for (size_t k = 0; k < np; ++k) o->adj.hsize[cn[k]] = fmax(o->adj.hsize[cn[k]], h);
   }
-  return HOC_OK;
+  for (int f = 0; f < 2; ++f)
+    for (size_t b = 0; b < o->fam[f].n_blocks; ++b) {
+      size_t foot = o->fam[f].be_start[b + 1] - o->fam[f].be_start[b];
+      if (foot > o->max_foot) o->max_foot = foot;
+    }
+  return hoc_opt_frames_setup(o);
 }
 
 /* Derivatives dx/dz of every free node and the normals of every slot. */

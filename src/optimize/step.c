@@ -42,7 +42,8 @@ void hoc_opt_block_model(const hoc_opt *o, size_t b, hoc_opt_scratch *s, double 
       }
     }
     hoc_opt_gather(o, e, s->x, s->n);
-    int nr = hoc_opt_elem_residuals(o, e, s->x, s->n, s->nd, s->r, s->J, NULL);
+    int nr = hoc_opt_elem_residuals(o, e, s->x, s->n, hoc_opt_frames_of(o, e), s->nd, s->r, s->J,
+                                    NULL);
     double *Jz = s->Jz; /* [nr][nd] */
     memset(Jz, 0, (size_t)nr * (size_t)nd * sizeof *Jz);
     for (int i = 0; i < np; ++i) {
@@ -154,8 +155,14 @@ static int block_trial_flagged(const hoc_opt *o, size_t b, hoc_opt_scratch *s, d
     if (o->el.pvalid[e] && o->adj.on_boundary[e] && !relaxed_uv(o, e) &&
         !hoc_opt_param_valid(o, e, s->uv))
       return 0;
+    const double *fr = hoc_opt_frames_of(o, e);
+    if (fr) {
+      double *tf = s->fr + (a - o->B->be_start[b]) * 9 * (size_t)o->fc.npts;
+      hoc_opt_frames_trial(o, e, fr, tf);
+      fr = tf;
+    }
     double smin;
-    int nr = hoc_opt_elem_residuals(o, e, s->x, s->n, NULL, s->r, NULL, &smin);
+    int nr = hoc_opt_elem_residuals(o, e, s->x, s->n, fr, NULL, s->r, NULL, &smin);
     if (o->el.valid[e] && !relaxed(o, e) && !(smin > 0)) return 0;
     for (int q = 0; q < nr; ++q) *f += s->r[q] * s->r[q];
   }
@@ -165,17 +172,34 @@ static int block_trial_flagged(const hoc_opt *o, size_t b, hoc_opt_scratch *s, d
   for (size_t a = o->B->be_start[b]; a < o->B->be_start[b + 1]; ++a) {
     size_t e = o->B->be_elem[a];
     if (!o->el.valid[e] || relaxed(o, e)) continue;
+    int exact = o->cfg.exact || (hoc_opt_guarded(o, e) && o->el.xvalid[e]);
+    if (hoc_opt_frames_of(o, e)) {
+      const double *tf = s->fr + (a - o->B->be_start[b]) * 9 * (size_t)o->fc.npts;
+      if (hoc_element_frames_tangled(o->t, tf, o->nq, o->fc.npts)) return 0;
+      if (!exact) continue;
+      hoc_opt_gather(o, e, s->x, s->n);
+      if (hoc_element_folded(o->t, s->x, s->n)) return 0;
+      continue;
+    }
     hoc_opt_gather(o, e, s->x, s->n);
-    if (hoc_element_nodes_tangled(o->t, s->x, s->n,
-                                  o->cfg.exact || (hoc_opt_guarded(o, e) && o->el.xvalid[e])))
-      return 0;
+    if (hoc_element_nodes_tangled(o->t, s->x, s->n, exact)) return 0;
   }
   return 1;
+}
+
+/* The kept frames of block b's elements become its trial's (accepted). */
+static void frames_accept(hoc_opt *o, size_t b, const hoc_opt_scratch *s) {
+  size_t size = 9 * (size_t)o->fc.npts;
+  for (size_t a = o->B->be_start[b]; a < o->B->be_start[b + 1]; ++a) {
+    double *fr = hoc_opt_frames_of(o, o->B->be_elem[a]);
+    if (fr) memcpy(fr, s->fr + (a - o->B->be_start[b]) * size, size * sizeof *fr);
+  }
 }
 
 static int block_trial(hoc_opt *o, size_t b, hoc_opt_scratch *s, double fmax, double *f) {
   hoc_opt_set_moving(o, b, 1);
   int ok = block_trial_flagged(o, b, s, fmax, f);
+  if (ok) frames_accept(o, b, s);
   hoc_opt_set_moving(o, b, 0);
   return ok;
 }
@@ -339,8 +363,9 @@ hoc_status hoc_opt_scratch_alloc(const hoc_opt *o, int nthreads, hoc_opt_scratch
     s[i].w = hoc_calloc(np, sizeof(double));
     s[i].off = hoc_calloc(np, sizeof(int));
     s[i].nd = hoc_calloc(np, 1);
+    s[i].fr = hoc_calloc(o->max_foot * 9 * (size_t)o->fc.npts + 1, sizeof(double));
     if (!s[i].x || !s[i].n || !s[i].r || !s[i].J || !s[i].uv || !s[i].Jz || !s[i].H || !s[i].g ||
-        !s[i].L || !s[i].w || !s[i].off || !s[i].nd)
+        !s[i].L || !s[i].w || !s[i].off || !s[i].nd || !s[i].fr)
       failed = 1;
   }
   *out = s;
@@ -363,6 +388,7 @@ void hoc_opt_scratch_free(hoc_opt_scratch *s, int nthreads) {
     free(s[i].w);
     free(s[i].off);
     free(s[i].nd);
+    free(s[i].fr);
   }
   free(s);
 }

@@ -134,6 +134,19 @@
 #define HOC_OPT_MU_LAST 1e6
 #define HOC_OPT_DIAG_FLOOR 1e-12
 
+/* Memory ----------------------------------------------------------------- */
+
+/* Bytes of the pool of element frames (hoc_opt_frames: 9 numbers per
+ * sample point, 43 KB an element at order 10, 2.5 KB at order 3): the
+ * elements beyond it, in element order, are evaluated from their nodes
+ * every time, at the cost of the frames (p^4 a visit instead of p^2). */
+#define HOC_OPT_FRAME_POOL_BYTES ((size_t)512 << 20)
+/* The frames are kept from this order on: below it an element has at most
+ * 21 nodes and its frames cost little more from its nodes, while the pool
+ * would more than double the memory of a large mesh (nist_ftc_07, 114 600
+ * elements at order 3: 462 MB without, 1 156 MB with). */
+#define HOC_OPT_FRAME_MIN_ORDER 6
+
 /* Polish ----------------------------------------------------------------- */
 
 /* The polish is a search for the last few folds: with more tangled

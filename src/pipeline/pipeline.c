@@ -174,6 +174,47 @@ static hoc_status linear_mesh(const hoc_run *run, hoc_model *model, hoc_linear_o
   return hoc_repair_linear(run, model, lo, lin);
 }
 
+/* The start of a high order's optimisation from the optimised coarse
+ * order (HOC_PIPELINE_COARSE_FROM): *ho (the direct raise, measured)
+ * becomes lin raised to the coarse order, optimised, and raised to the
+ * order asked, unless that leaves elements tangled at the coarse order
+ * (then the direct raise, made again). */
+static hoc_status coarse_start(const hoc_run *run, hoc_stages *r, const hoc_mesh *lin,
+                               hoc_mesh **ho) {
+  const hoc_mesh_options *o = &run->o;
+  hoc_mesh *coarse = NULL, *raised = NULL;
+  hoc_status status = HOC_OK;
+  HOC_TRY(hoc_run_event(run, HOC_EVENT_PROGRESS, "optimising at order %d first",
+                        HOC_PIPELINE_COARSE_ORDER));
+  /* the direct raise is measured already: made again only if needed */
+  hoc_mesh_destroy(ho);
+  double t0 = hoc_pipeline_now();
+  HOC_TRY_GOTO(hoc_mesh_elevate(lin, HOC_PIPELINE_COARSE_ORDER, o->nodeset, &coarse), done);
+  HOC_TRY_GOTO(hoc_repair_optimize(run, r, "coarse", coarse, NULL), done);
+  if (hoc_stages_last(r)->stage.stats.tangled) {
+    HOC_TRY_GOTO(hoc_run_event(run, HOC_EVENT_NOTE,
+                               "order %d left %zu element(s) tangled: order %d starts from the "
+                               "straight elements",
+                               HOC_PIPELINE_COARSE_ORDER, hoc_stages_last(r)->stage.stats.tangled,
+                               o->order),
+                 done);
+    HOC_TRY_GOTO(hoc_mesh_elevate(lin, o->order, o->nodeset, ho), done);
+    goto done;
+  }
+  t0 = hoc_pipeline_now();
+  HOC_TRY_GOTO(hoc_mesh_elevate(coarse, o->order, o->nodeset, &raised), done);
+  HOC_TRY_GOTO(hoc_run_stage(run, r, "re-raised", raised, hoc_pipeline_now() - t0, NULL, NULL),
+               done);
+  hoc_mesh_destroy(ho);
+  *ho = raised;
+  raised = NULL;
+done:
+  (void)t0;
+  hoc_mesh_destroy(&raised);
+  hoc_mesh_destroy(&coarse);
+  return status;
+}
+
 /* The attempts of hoc_mesh_model: *final becomes the result (one of m's
  * meshes), *r its stages. */
 static hoc_status mesh_model_run(const hoc_run *run, hoc_model *model, model_meshes *m,
@@ -216,6 +257,10 @@ static hoc_status mesh_model_run(const hoc_run *run, hoc_model *model, model_mes
       /* the raised mesh before optimisation, for pictures */
       if (o->keep_stages)
         HOC_TRY_GOTO(hoc_mesh_elevate(m->lin, o->order, o->nodeset, &m->raised), done);
+      if (o->order >= HOC_PIPELINE_COARSE_FROM) {
+        HOC_TRY_GOTO(coarse_start(run, r, m->lin, &m->ho), done);
+        *final = m->ho;
+      }
       HOC_TRY_GOTO(hoc_repair_optimize(run, r, "optimized", m->ho, NULL), done);
     }
     /* elements left tangled: their faces meshed again finer, from the

@@ -44,6 +44,16 @@
  * (orders 2, 3, 5 and gmsh's order-3 meshes were measured so); at order 10
  * that took as long as the first optimisation, each split. */
 #define HOC_PIPELINE_LOCAL_MIN_ORDER 6
+/* From this order on, the optimiser starts from a coarser solution: the
+ * linear mesh raised to HOC_PIPELINE_COARSE_ORDER and optimised there
+ * ("coarse"), then raised to the order asked ("re-raised"). A high order
+ * raised from straight triangles folds wherever a face curves more than
+ * its elements (the gear at order 10: 146 tangled); raised from the
+ * optimised order 3 it starts from curved elements that fit (7 tangled),
+ * and order 3 untangles at a sixth of the cost per sweep. If the coarse
+ * optimisation leaves elements tangled, the direct raise is used. */
+#define HOC_PIPELINE_COARSE_FROM 6
+#define HOC_PIPELINE_COARSE_ORDER 3
 #define HOC_PIPELINE_LOCAL_RINGS 2
 
 /* gmsh's 2D algorithms (mesh/mesh.h) the faces holding linear triangles

@@ -157,9 +157,9 @@ static hoc_status add_finding(hoc_report *report, hoc_event_kind kind, text *t) 
   return HOC_OK;
 }
 
-/* The optimised stage of r, or NULL. */
+/* The last optimised stage of r, or NULL. */
 static const hoc_stage_record *optimized_stage(const hoc_stages *r) {
-  for (int i = 0; i < r->n; ++i)
+  for (int i = r->n - 1; i >= 0; --i)
     if (r->s[i].stage.optimized) return &r->s[i];
   return NULL;
 }

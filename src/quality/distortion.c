@@ -390,36 +390,121 @@ static void distortion_lanes(hoc_measure measure, double delta, int m, const dou
   }
 }
 
+/* Residuals (and J) of the quadrature points q0 .. q0 + m - 1 from their
+ * frames fr (stride st): the common part of hoc_element_residuals and
+ * hoc_element_residuals_frames. need_list[n_need]: the nodes whose
+ * columns of J are written. Returns the smallest sigma / |D phi|^2. */
+static double residual_chunk(const hoc_quality_tables *t, hoc_measure measure, double delta,
+                             int q0, int m, const double *fr, size_t st, const int *need_list,
+                             int n_need, double *r, double *J, lanes *L) {
+  int np = t->np;
+  double smin = INFINITY;
+  double eta[FRAME_POINTS], rel[FRAME_POINTS], g[6][FRAME_POINTS];
+  distortion_lanes(measure, delta, m, fr, st, L, eta, rel, J ? g : NULL);
+  for (int j = 0; j < m; ++j) {
+    int q = q0 + j;
+    if (!(rel[j] >= smin)) smin = rel[j];
+    double sw = sqrt(t->w[q]);
+    r[q] = sw * (eta[j] - 1);
+    if (!J) continue;
+    const double *G = t->G + 2 * (size_t)q * np;
+    double g1[3] = {g[0][j], g[1][j], g[2][j]}, g2[3] = {g[3][j], g[4][j], g[5][j]};
+    double *Jq = J + 3 * (size_t)q * np;
+    for (int a = 0; a < n_need; ++a) {
+      int i = need_list[a];
+      double gx = G[2 * i], gy = G[2 * i + 1];
+      for (int k = 0; k < 3; ++k) Jq[3 * i + k] = sw * (g1[k] * gx + g2[k] * gy);
+    }
+  }
+  return smin;
+}
+
+/* The nodes whose columns of J are wanted (need NULL: all). */
+static int need_to_list(int np, const unsigned char *need, int *list) {
+  int n = 0;
+  for (int i = 0; i < np; ++i)
+    if (!need || need[i]) list[n++] = i;
+  return n;
+}
+
+enum { NP_LIST = (HOC_MAX_ORDER + 1) * (HOC_MAX_ORDER + 2) / 2 };
+
 double hoc_element_residuals(const hoc_quality_tables *t, hoc_measure measure, const double *x,
                              const double *n, double delta, const unsigned char *need, double *r,
                              double *J) {
-  int np = t->np, nq = t->nq;
-  double smin = INFINITY;
-  double fr[9 * FRAME_POINTS], eta[FRAME_POINTS], rel[FRAME_POINTS], g[6][FRAME_POINTS];
+  int nq = t->nq, list[NP_LIST];
+  int n_need = J ? need_to_list(t->np, need, list) : 0;
+  double smin = INFINITY, fr[9 * FRAME_POINTS];
   lanes L;
   int end = (nq + HOC_QB - 1) / HOC_QB;
   for (int b0 = 0; b0 < end; b0 += FRAME_BLOCKS) {
     int b1 = b0 + FRAME_BLOCKS < end ? b0 + FRAME_BLOCKS : end;
     frames(t, b0, b1, x, n, fr);
     int q0 = b0 * HOC_QB, m = (b1 * HOC_QB < nq ? b1 * HOC_QB : nq) - q0;
-    distortion_lanes(measure, delta, m, fr, (size_t)(b1 - b0) * HOC_QB, &L, eta, rel,
-                     J ? g : NULL);
-    for (int j = 0; j < m; ++j) {
-      int q = q0 + j;
-      if (!(rel[j] >= smin)) smin = rel[j];
-      double sw = sqrt(t->w[q]);
-      r[q] = sw * (eta[j] - 1);
-      if (!J) continue;
-      const double *G = t->G + 2 * (size_t)q * np;
-      double g1[3] = {g[0][j], g[1][j], g[2][j]}, g2[3] = {g[3][j], g[4][j], g[5][j]};
-      double *Jq = J + 3 * (size_t)q * np;
-      for (int i = 0; i < np; ++i) {
-        if (need && !need[i]) continue;
-        for (int k = 0; k < 3; ++k) Jq[3 * i + k] = sw * (g1[k] * G[2 * i] + g2[k] * G[2 * i + 1]);
+    double s = residual_chunk(t, measure, delta, q0, m, fr, (size_t)(b1 - b0) * HOC_QB, list,
+                              n_need, r, J, &L);
+    if (!(s >= smin)) smin = s;
+  }
+  return smin;
+}
+
+int hoc_element_frame_points(const hoc_quality_tables *t) { return t->n_check_blocks * HOC_QB; }
+
+void hoc_element_frames(const hoc_quality_tables *t, const double *x, const double *n,
+                        double *fr) {
+  frames(t, 0, t->n_check_blocks, x, n, fr);
+}
+
+void hoc_element_frames_move(const hoc_quality_tables *t, const double *fr, int node,
+                             const double dx[3], const double dn[3], double *out) {
+  int np = t->np, nb = t->n_check_blocks;
+  size_t st = (size_t)nb * HOC_QB;
+  for (int b = 0; b < nb; ++b) {
+    size_t off = ((size_t)b * (size_t)np + (size_t)node) * HOC_QB;
+    const double *gx = t->Bx + off, *gy = t->By + off, *gn = t->Bn + off;
+    size_t k0 = (size_t)b * HOC_QB;
+    for (int c = 0; c < 3; ++c) {
+      const double *f1 = fr + c * st + k0, *f2 = fr + (3 + c) * st + k0, *f3 = fr + (6 + c) * st + k0;
+      double *o1 = out + c * st + k0, *o2 = out + (3 + c) * st + k0, *o3 = out + (6 + c) * st + k0;
+      double x = dx[c], nn = dn[c];
+      for (int l = 0; l < HOC_QB; ++l) {
+        o1[l] = f1[l] + gx[l] * x;
+        o2[l] = f2[l] + gy[l] * x;
+        o3[l] = f3[l] + gn[l] * nn;
       }
     }
   }
+}
+
+double hoc_element_residuals_frames(const hoc_quality_tables *t, hoc_measure measure,
+                                    const double *fr, double delta, const unsigned char *need,
+                                    double *r, double *J) {
+  int nq = t->nq, list[NP_LIST];
+  int n_need = J ? need_to_list(t->np, need, list) : 0;
+  size_t st = (size_t)t->n_check_blocks * HOC_QB;
+  double smin = INFINITY;
+  lanes L;
+  for (int q0 = 0; q0 < nq; q0 += FRAME_POINTS) {
+    int m = nq - q0 < FRAME_POINTS ? nq - q0 : FRAME_POINTS;
+    double s = residual_chunk(t, measure, delta, q0, m, fr + q0, st, list, n_need, r, J, &L);
+    if (!(s >= smin)) smin = s;
+  }
   return smin;
+}
+
+int hoc_element_frames_tangled(const hoc_quality_tables *t, const double *fr, int first,
+                               int last) {
+  size_t st = (size_t)t->n_check_blocks * HOC_QB;
+  const double *a10 = fr, *a11 = fr + st, *a12 = fr + 2 * st, *a20 = fr + 3 * st,
+               *a21 = fr + 4 * st, *a22 = fr + 5 * st, *n0 = fr + 6 * st, *n1 = fr + 7 * st,
+               *n2 = fr + 8 * st;
+  int bad = 0;
+  for (int k = first; k < last; ++k) {
+    double c0 = a11[k] * a22[k] - a12[k] * a21[k], c1 = a12[k] * a20[k] - a10[k] * a22[k],
+           c2 = a10[k] * a21[k] - a11[k] * a20[k];
+    bad |= !(c0 * n0[k] + c1 * n1[k] + c2 * n2[k] > 0) | !(c0 * c0 + c1 * c1 + c2 * c2 > 0);
+  }
+  return bad;
 }
 
 int hoc_element_node_points(const hoc_quality_tables *t, int dense) {

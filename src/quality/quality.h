@@ -149,6 +149,31 @@ double hoc_element_residuals(const hoc_quality_tables *t, hoc_measure measure, c
                              const double *n, double delta, const unsigned char *need, double *r,
                              double *J);
 
+/** Frames of an element: the columns a1, a2 of D phi and the interpolated
+ *  normal n at every point of the tangle test's samples (quadrature points,
+ *  nodes, the order-2p lattice, padded to blocks): fr[9][npts] (a1 x, y, z,
+ *  a2 x, y, z, n x, y, z; point k at k), npts = hoc_element_frame_points.
+ *  The optimiser keeps them per element and moves them with its nodes. */
+int hoc_element_frame_points(const hoc_quality_tables *t);
+void hoc_element_frames(const hoc_quality_tables *t, const double *x, const double *n,
+                        double *fr);
+
+/** The frames after local node `node` moved by dx[3] and its normal by
+ *  dn[3]: out = fr + the change (every frame is linear in the nodes'
+ *  positions and normals); out may be fr. */
+void hoc_element_frames_move(const hoc_quality_tables *t, const double *fr, int node,
+                             const double dx[3], const double dn[3], double *out);
+
+/** hoc_element_residuals from an element's frames (hoc_element_frames). */
+double hoc_element_residuals_frames(const hoc_quality_tables *t, hoc_measure measure,
+                                    const double *fr, double delta, const unsigned char *need,
+                                    double *r, double *J);
+
+/** 1 if sigma <= 0 at one of the frames' points first .. last - 1 (the
+ *  nodes and lattice are nq .. hoc_element_frame_points). */
+int hoc_element_frames_tangled(const hoc_quality_tables *t, const double *fr, int first,
+                               int last);
+
 /** Residuals at the element's nodes and validation points,
  *  r_j = sqrt(1/count) (eta(point j) - 1), for untangling: the tangle test
  *  also asks det > 0 there, which the quadrature points alone do not see.
