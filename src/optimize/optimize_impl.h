@@ -137,6 +137,7 @@ typedef struct hoc_opt_settings {
   double eps;         /* regularisation scale of tangled elements (relative to their size) */
   double min_gain;    /* per node: a step that lowers f by less puts the block to sleep */
   double wake_factor; /* a move must gain this many times min_gain to wake its neighbours */
+  int wake_near_only; /* the untangling factor only for blocks with a node in node.near */
 } hoc_opt_settings;
 
 /* Trial state of the blocks of a colour and of their nodes. */
@@ -258,6 +259,8 @@ void hoc_opt_wake_node(hoc_opt *o, size_t k);
 void hoc_opt_wake_all(hoc_opt *o);
 /* o->node.near: within HOC_OPT_NEAR_RINGS rings of a tangled element. */
 void hoc_opt_mark_near(hoc_opt *o);
+/* Nodes of an element of order p. */
+#define HOC_OPT_NP(p) (((p) + 1) * ((p) + 2) / 2)
 /* The active blocks of a colour of o->B into o->trial.list; their number. */
 size_t hoc_opt_select_active(hoc_opt *o, int color);
 

@@ -159,8 +159,10 @@ static hoc_status sweep(run *r, size_t *moved) {
   hoc_mesh *mesh = r->mesh;
   *moved = 0;
   int local = o->cfg.exact && r->tangled;
-  if (local) hoc_opt_mark_near(o);
-  else if (o->cfg.local) hoc_opt_wake_all(o); /* the nodes left awake elsewhere */
+  int near_only = r->tangled && o->np >= HOC_OPT_NP(HOC_OPT_WAKE_NEAR_MIN_ORDER);
+  if (local || near_only) hoc_opt_mark_near(o);
+  if (!local && o->cfg.local) hoc_opt_wake_all(o); /* the nodes left awake elsewhere */
+  o->cfg.wake_near_only = near_only;
   o->cfg.local = local;
   /* nodes near tangled elements and nodes of poor elements (those that set
    * the mesh's worst quality) never sleep */

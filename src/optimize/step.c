@@ -211,6 +211,13 @@ static int near_tangled(const hoc_opt *o, size_t b) {
   return 0;
 }
 
+/* Block b moves a node within HOC_OPT_NEAR_RINGS of a tangled element. */
+static int near_fold(const hoc_opt *o, size_t b) {
+  for (size_t a = o->B->bn_start[b]; a < o->B->bn_start[b + 1]; ++a)
+    if (o->node.near[o->B->bn_node[a]]) return 1;
+  return 0;
+}
+
 /* One colour: a Gauss-Newton step per active block, then a common
  * backtracking line search. *moved counts the nodes moved. */
 hoc_status hoc_opt_do_color(hoc_opt *o, int color, hoc_opt_scratch *scr, int nthreads,
@@ -308,8 +315,9 @@ hoc_status hoc_opt_do_color(hoc_opt *o, int color, hoc_opt_scratch *scr, int nth
       *moved += nodes;
       /* only a significant move wakes the neighbourhood (small ones would
        * spread waves of smaller ones through the whole mesh) */
-      if (o->trial.f0[b] - o->trial.fnew[b] <
-              o->cfg.wake_factor * o->cfg.min_gain * (double)nodes &&
+      double factor = o->cfg.wake_factor;
+      if (o->cfg.wake_near_only && !near_fold(o, b)) factor = HOC_OPT_WAKE_SMOOTHING;
+      if (o->trial.f0[b] - o->trial.fnew[b] < factor * o->cfg.min_gain * (double)nodes &&
           !near_tangled(o, b))
         continue;
       /* wake every node of the elements it touches (itself included) */

@@ -61,6 +61,14 @@
  * smaller ones through the whole mesh). */
 #define HOC_OPT_WAKE_UNTANGLING 1
 #define HOC_OPT_WAKE_SMOOTHING 10
+/* From this order on, while untangling, only blocks within
+ * HOC_OPT_NEAR_RINGS of a tangled element wake on every move; elsewhere a
+ * move must be significant as when smoothing. With a fold or two left in
+ * a large mesh, every-move waking sends a wave through the whole mesh each
+ * sweep; at high orders each visit costs p^2 sample points and such waves
+ * dominate (gear_f360 at order 10: 79 s of CPU on one thread with this
+ * rule; without it, not ended after 170 s of CPU on two). */
+#define HOC_OPT_WAKE_NEAR_MIN_ORDER 6
 
 /* While the exact phase untangles, only blocks within this many rings of
  * elements (sharing a node) of a tangled element move: its folds are few
