@@ -3,112 +3,15 @@
  * they use with their classification. Every count in the file is checked
  * against what the rest of the file can hold before anything is allocated
  * from it, and every read is bounds-checked: malformed input fails with
- * HOC_ERR_FORMAT and one line naming the place.
+ * HOC_ERR_FORMAT and one line naming the place. Loading the file into
+ * memory is in msh_load.c, decimal numbers in msh_numbers.c.
  * SPDX-License-Identifier: GPL-2.0-or-later */
 #include "io/io.h"
 
-#include <errno.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
-
-/* Decimal numbers -------------------------------------------------------------- */
-
-/* strtod on a copy with a NUL (the buffer the reader scans has none). */
-static int parse_double_slow(const char *s, size_t n, double *v) {
-  char buf[512];
-  if (n == 0 || n >= sizeof buf) return 0;
-  memcpy(buf, s, n);
-  buf[n] = '\0';
-  char *end;
-  *v = strtod(buf, &end);
-  return end == buf + n;
-}
-
-int hoc_io_parse_double(const char *s, size_t n, double *v) {
-#if defined(__SIZEOF_INT128__)
-  __extension__ typedef unsigned __int128 u128;
-  if (n > 400) return parse_double_slow(s, n, v); /* bounds the digit counters below */
-  const char *p = s, *end = s + n;
-  int neg = 0;
-  if (p < end && (*p == '-' || *p == '+')) neg = *p++ == '-';
-  uint64_t w = 0;    /* the first 19 significant digits */
-  int nd = 0;        /* digits in w */
-  int scale = 0;     /* value = w 10^(scale + exponent) */
-  int truncated = 0; /* nonzero digits beyond the 19th */
-  int digits = 0;    /* digits seen at all */
-  for (; p < end && *p >= '0' && *p <= '9'; ++p, ++digits) {
-    if (nd < 19) {
-      w = 10 * w + (uint64_t)(*p - '0');
-      nd += w != 0;
-    } else {
-      ++scale;
-      truncated |= *p != '0';
-    }
-  }
-  if (p < end && *p == '.') {
-    for (++p; p < end && *p >= '0' && *p <= '9'; ++p, ++digits) {
-      if (nd < 19) {
-        w = 10 * w + (uint64_t)(*p - '0');
-        nd += w != 0;
-        --scale;
-      } else {
-        truncated |= *p != '0';
-      }
-    }
-  }
-  if (!digits) return parse_double_slow(s, n, v); /* inf, nan or not a number */
-  if (p < end && (*p == 'e' || *p == 'E')) {
-    ++p;
-    int eneg = 0, edigits = 0, e = 0;
-    if (p < end && (*p == '-' || *p == '+')) eneg = *p++ == '-';
-    for (; p < end && *p >= '0' && *p <= '9'; ++p, ++edigits)
-      if (e < 100000) e = 10 * e + (*p - '0');
-    if (!edigits) return 0;
-    scale += eneg ? -e : e;
-  }
-  if (p != end) return 0;
-  if (w == 0 && !truncated) {
-    *v = neg ? -0.0 : 0.0;
-    return 1;
-  }
-  uint64_t ph, pl;
-  int pb;
-  if (truncated || !hoc_io_pow10(scale, &ph, &pl, &pb)) return parse_double_slow(s, n, v);
-  /* w 10^scale ~= P 2^(pb - lz) with P = (w << lz) M, 2^190 <= P < 2^192;
-   * P is below the exact product by less than 2^64 */
-  int lz = 0;
-  while (!(w >> (63 - lz)))
-    ++lz;
-  uint64_t wn = w << lz;
-  u128 p0 = (u128)wn * pl, p1 = (u128)wn * ph;
-  u128 mid = (p0 >> 64) + (uint64_t)p1;
-  uint64_t w1 = (uint64_t)mid;
-  uint64_t w2 = (uint64_t)(p1 >> 64) + (uint64_t)(mid >> 64);
-  int shift = (w2 >> 63) ? 139 : 138; /* the 53-bit mantissa is P >> shift */
-  uint64_t m = w2 >> (shift - 128);
-  int hb = (int)((w2 >> (shift - 129)) & 1);          /* the bit worth half an ulp */
-  uint64_t mask = (UINT64_C(1) << (shift - 129)) - 1; /* the bits of w2 below it */
-  if (hb == 0 && (w2 & mask) == mask && w1 == UINT64_MAX) return parse_double_slow(s, n, v);
-  if (hb == 1 && (w2 & mask) == 0 && w1 == 0) return parse_double_slow(s, n, v);
-  m += (uint64_t)hb;
-  int e2 = shift + pb - lz; /* value = m 2^e2 */
-  if (m == UINT64_C(1) << 53) {
-    m >>= 1;
-    ++e2;
-  }
-  int biased = e2 + 1075;
-  if (biased < 1 || biased > 2046) return parse_double_slow(s, n, v); /* subnormal or overflow */
-  uint64_t bits = ((uint64_t)biased << 52) | (m & ((UINT64_C(1) << 52) - 1));
-  if (neg) bits |= UINT64_C(1) << 63;
-  memcpy(v, &bits, sizeof bits);
-  return 1;
-#else
-  return parse_double_slow(s, n, v);
-#endif
-}
 
 /* Scanning ------------------------------------------------------------------- */
 
@@ -981,58 +884,4 @@ hoc_status hoc_msh_read_buffer(const char *data, size_t size, const char *name, 
   mesh_in_free(&m);
   if (status != HOC_OK) hoc_msh_raw_free(raw);
   return status;
-}
-
-hoc_status hoc_msh_read(const char *path, hoc_msh_raw *raw) {
-  HOC_CHECK(raw, HOC_ERR_ARGUMENT, "no output given");
-  memset(raw, 0, sizeof *raw);
-  HOC_CHECK(path && path[0], HOC_ERR_ARGUMENT, "no mesh file name given");
-  FILE *f = fopen(path, "rb");
-  if (!f) return HOC_ERROR(HOC_ERR_IO, "cannot open '%s': %s", path, strerror(errno));
-  struct stat st;
-  if (fstat(fileno(f), &st) == 0 && S_ISDIR(st.st_mode)) {
-    fclose(f);
-    return HOC_ERROR(HOC_ERR_IO, "cannot read '%s': it is a directory", path);
-  }
-  /* the size is a hint only (pipes have none) */
-  size_t cap = st.st_size > 0 ? (size_t)st.st_size + 1 : 1 << 16, len = 0;
-  char *data = malloc(cap);
-  hoc_status status = HOC_OK;
-  for (;;) {
-    if (!data) {
-      status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory reading '%s' (%zu bytes)", path, cap);
-      break;
-    }
-    len += fread(data + len, 1, cap - len, f);
-    if (ferror(f)) {
-      status = HOC_ERROR(HOC_ERR_IO, "cannot read '%s': %s", path, strerror(errno ? errno : EIO));
-      break;
-    }
-    if (feof(f)) break;
-    if (len == cap) {
-      char *more = cap < SIZE_MAX / 2 ? realloc(data, 2 * cap) : NULL;
-      if (!more) free(data);
-      data = more;
-      cap *= 2;
-    }
-  }
-  fclose(f);
-  if (status == HOC_OK) status = hoc_msh_read_buffer(data, len, path, raw);
-  free(data);
-  return status;
-}
-
-void hoc_msh_raw_free(hoc_msh_raw *raw) {
-  if (!raw) return;
-  free(raw->node_tag);
-  free(raw->xyz);
-  free(raw->node_dim);
-  free(raw->node_entity_tag);
-  free(raw->param);
-  free(raw->has_param);
-  free(raw->tri_nodes);
-  free(raw->tri_surface_tag);
-  free(raw->line_nodes);
-  free(raw->line_curve_tag);
-  memset(raw, 0, sizeof *raw);
 }

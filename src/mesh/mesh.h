@@ -116,6 +116,17 @@ hoc_status hoc_mesh_given_limit(hoc_model *model, double *limit);
 hoc_status hoc_mesh_assemble(hoc_model *model, const hoc_mesh_source *src, double tolerance,
                              hoc_mesh **mesh);
 
+/* Steps of hoc_mesh_assemble once the slots are built (poles.c), in order. */
+/** One slot per element at each pole slot shared with other faces: the
+ *  first element keeps it, each further one gets a copy. */
+hoc_status hoc_mesh_split_pole_slots(hoc_mesh *m);
+/** Each element's parameters (elem_uv), unwrapped around a regular node;
+ *  pole nodes take the mean of the element's regular vertices. */
+void hoc_mesh_element_params(hoc_mesh *m);
+/** The arbitrary coordinate of each element's pole slot: the element's own
+ *  parameter, wrapped into the face's range. */
+void hoc_mesh_per_element_pole_params(hoc_mesh *m);
+
 /** Allocate an empty mesh with its arrays for the given sizes. */
 hoc_status hoc_mesh_alloc(hoc_model *model, int order, size_t n_nodes, size_t n_elems,
                           hoc_mesh **mesh);

@@ -1,4 +1,6 @@
 /* Pictures of curved meshes coloured by quality: a software rasterizer.
+ * Its state is declared in raster.h; the titles, statistics, rings and
+ * colour bar drawn over the panels are in render_overlays.c.
  * SPDX-License-Identifier: GPL-2.0-or-later
  *
  * How a picture is made:
@@ -27,6 +29,7 @@
  *    one thread from its own buffers (so the result does not depend on the
  *    thread count) and written to the PNG in order.
  */
+#include "render/raster.h"
 #include "render/render_impl.h"
 
 #include "basis/basis.h"
@@ -41,75 +44,6 @@
 #ifdef _OPENMP
 #include <omp.h>
 #endif
-
-enum {
-  SS = 3,                 /* samples per output pixel along each axis */
-  MAX_SUB = 48,           /* finest subdivision of an element edge */
-  WORST_COUNT = 5,        /* elements considered by zoom_worst */
-  MAX_MARKERS = 1000,     /* rings around tangled elements */
-  BAND_SAMPLES = 1 << 19, /* samples in a band buffer (about 4 MB with the depths) */
-  MAX_THREADS = 16,       /* bounds the memory of the band buffers */
-  OUT_BYTES = 1 << 25     /* finished rows held before writing (at least one band a thread) */
-};
-#define FRAME_FILL 0.9 /* the frame fills 90% of the panel's limiting side */
-#define SUB_PIXELS 4.0 /* target sub-triangle size on screen (output pixels) */
-#define EDGE_OPACITY 0.9
-#define MARKER_BELOW 12.0 /* tangled elements smaller than this (pixels) get a ring */
-#define AMBIENT 0.42
-#define DIFFUSE 0.58
-
-/* The reference triangle cut into n^2 sub-triangles, with the basis at the lattice points. */
-typedef struct lattice_table {
-  int n;      /* subdivisions per edge */
-  int npts;   /* (n+1)(n+2)/2 lattice points */
-  int ntri;   /* n^2 sub-triangles */
-  double *rs; /* [npts][2] lattice points (i/n, j/n) */
-  double *N;  /* [npts][np] basis values */
-  double *dN; /* [npts][np][2] d/dr, d/ds */
-  int *tri;   /* [ntri][3] lattice point indices */
-} lattice_table;
-
-/* Per-view state. */
-typedef struct view_state {
-  const hoc_render_mesh *mesh;
-  int np;
-  lattice_table tab; /* the view's subdivision */
-  double *box;       /* [n_elems][4] screen-space node bbox: xmin, xmax, ymin, ymax */
-  int32_t *bands;    /* [n_elems][2] first and last band touched (first > last: none) */
-  int x0, x1;        /* panel columns [x0, x1) */
-  double cx, cy;     /* panel centre (pixels) */
-} view_state;
-
-/* Everything a band needs, read-only while rendering. */
-typedef struct render_ctx {
-  int width, height, transparent, edges;
-  int n_views;
-  view_state *views;
-  double right[3], up[3], dir[3], light[3];
-  double fx, fy, fz; /* frame centre: screen x, screen y, depth (model units) */
-  double scale;      /* output pixels per model unit */
-  double zclip;      /* elements wholly nearer than this (depth) are not drawn (zoom_worst) */
-  int panel_y0;      /* first row of the panels (below the title band) */
-  int band_rows, n_bands;
-  hoc_render_scale qscale;
-  /* layout of the overlays */
-  int title_scale, label_scale, pad, has_title, has_stats;
-  double edge_half_width; /* output pixels: 0.55 (small pictures) to 0.75 (1200 rows) and up */
-  int bar_x0, bar_x1, bar_y0, bar_y1; /* colour bar rectangle */
-  char (*stats)[96];                  /* [n_views] statistics line */
-  double *markers; /* [n_markers][3] x, y (pixels), view: rings around small tangled elements */
-  size_t n_markers;
-} render_ctx;
-
-/* Per-thread scratch. */
-typedef struct workspace {
-  float *z;       /* [band_rows SS][width SS] depth, larger is nearer */
-  uint32_t *rgba; /* [band_rows SS][width SS] packed sample colours */
-  double *x;      /* [np][3] element nodes */
-  double *pts;    /* [MAX_PTS][4] screen x, y (samples), depth, intensity */
-} workspace;
-
-#define MAX_PTS ((MAX_SUB + 1) * (MAX_SUB + 2) / 2)
 
 static double dot3(const double *a, const double *b) {
   return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
@@ -128,13 +62,6 @@ static void normalize3(double *a) {
 
 static uint32_t pack(hoc_rgb c, unsigned a) {
   return (uint32_t)c.r | (uint32_t)c.g << 8 | (uint32_t)c.b << 16 | (uint32_t)a << 24;
-}
-
-/* A double clamped to [lo, hi] as an int (NaN gives lo). */
-static int clamp_int(double v, int lo, int hi) {
-  if (!(v > lo)) return lo;
-  if (v > hi) return hi;
-  return (int)v;
 }
 
 /* Minimum and maximum without libm calls (the arguments are never NaN here). */
@@ -634,143 +561,6 @@ static void draw_element(const render_ctx *ctx, const view_state *vs, size_t e, 
   }
 }
 
-/* Overlays ---------------------------------------------------------------- */
-
-static void format_q(char *buf, size_t n, double v) { snprintf(buf, n, "%.2f", v); }
-
-/* Tangled elements too small to see get a ring around them (visible or not:
- * the ring says where to look, or which view to choose). */
-static hoc_status find_markers(render_ctx *ctx) {
-  size_t n = 0;
-  for (int pass = 0; pass < 2; ++pass) {
-    n = 0;
-    for (int k = 0; k < ctx->n_views; ++k) {
-      const view_state *vs = &ctx->views[k];
-      const hoc_render_mesh *m = vs->mesh;
-      if (!m->q) continue;
-      for (size_t e = 0; e < m->n_elems && n < MAX_MARKERS; ++e) {
-        if (hoc_render_q(m, e) != 0) continue;
-        const double *b = vs->box + 4 * e;
-        if (ctx->scale * hypot(b[1] - b[0], b[3] - b[2]) >= MARKER_BELOW) continue;
-        double x = vs->cx + ctx->scale * (0.5 * (b[0] + b[1]) - ctx->fx);
-        double y = vs->cy - ctx->scale * (0.5 * (b[2] + b[3]) - ctx->fy);
-        if (x < vs->x0 || x >= vs->x1 || y < ctx->panel_y0 || y >= ctx->height) continue;
-        if (pass == 1) {
-          ctx->markers[3 * n] = x;
-          ctx->markers[3 * n + 1] = y;
-          ctx->markers[3 * n + 2] = k;
-        }
-        ++n;
-      }
-    }
-    if (pass == 0 && n > 0) HOC_ALLOC(ctx->markers, 3 * n);
-  }
-  ctx->n_markers = n;
-  return HOC_OK;
-}
-
-/* Anti-aliased ring of radius r and width w (pixels) clipped to columns
- * [x0, x1). */
-static void draw_ring(hoc_canvas *c, double cx, double cy, double r, double w, int x0, int x1,
-                      hoc_rgb col) {
-  int ya = clamp_int(floor(cy - r - w), c->y0, c->y0 + c->rows);
-  int yb = clamp_int(ceil(cy + r + w) + 1, c->y0, c->y0 + c->rows);
-  int xa = clamp_int(floor(cx - r - w), x0, x1), xb = clamp_int(ceil(cx + r + w) + 1, x0, x1);
-  for (int y = ya; y < yb; ++y)
-    for (int x = xa; x < xb; ++x) {
-      double d = fabs(hypot(x + 0.5 - cx, y + 0.5 - cy) - r);
-      hoc_canvas_blend(c, x, y, col, 0.5 * w + 0.5 - d);
-    }
-}
-
-static void draw_overlays(const render_ctx *ctx, hoc_canvas *c) {
-  const int ls = ctx->label_scale, pad = ctx->pad;
-  const hoc_rgb sep = {215, 215, 215};
-  /* one text size for all the titles and one for all the statistics lines,
-   * so that the panels read alike */
-  int ts_all = ctx->title_scale, ls_all = ls;
-  for (int k = 0; k < ctx->n_views; ++k) {
-    const view_state *vs = &ctx->views[k];
-    int room = vs->x1 - vs->x0 - 2 * pad;
-    if (ctx->has_title && vs->mesh->title) {
-      int s = hoc_text_fit(vs->mesh->title, ctx->title_scale, room);
-      if (s < ts_all) ts_all = s;
-    }
-    if (ctx->has_stats && ctx->stats[k][0]) {
-      int s = hoc_text_fit(ctx->stats[k], ls, room);
-      if (s < ls_all) ls_all = s;
-    }
-  }
-  for (int k = 0; k < ctx->n_views; ++k) {
-    const view_state *vs = &ctx->views[k];
-    int pw = vs->x1 - vs->x0, y = pad;
-    if (k > 0) hoc_canvas_rect(c, vs->x0, 0, vs->x0 + 1, ctx->height, sep, 1);
-    if (ctx->has_title) {
-      const char *title = vs->mesh->title;
-      if (title) {
-        int s = ts_all;
-        int x = vs->x0 + (pw - hoc_text_width(title, s)) / 2;
-        hoc_canvas_text(c, x, y + (ctx->title_scale - s) * HOC_FONT_ASCENT, title, s,
-                        HOC_RENDER_INK);
-      }
-      y += HOC_FONT_LINE * ctx->title_scale;
-    }
-    if (ctx->has_stats && ctx->stats[k][0]) {
-      const char *line = ctx->stats[k];
-      int s = ls_all;
-      int x = vs->x0 + (pw - hoc_text_width(line, s)) / 2;
-      hoc_canvas_text(c, x, y, line, s, HOC_RENDER_INK);
-    }
-  }
-  for (size_t i = 0; i < ctx->n_markers; ++i) {
-    const double *mk = ctx->markers + 3 * i;
-    const view_state *vs = &ctx->views[(int)mk[2]];
-    draw_ring(c, mk[0], mk[1], 6 + 3 * ls, 1 + 0.5 * ls, vs->x0, vs->x1, HOC_RENDER_TANGLED);
-  }
-  if (!ctx->qscale.has_q) return;
-  /* colour bar: gradient, frame, ticks with labels, "q" above, tangled below */
-  const hoc_render_scale *sc = &ctx->qscale;
-  int bx0 = ctx->bar_x0, bx1 = ctx->bar_x1, by0 = ctx->bar_y0, by1 = ctx->bar_y1;
-  int bh = by1 - by0;
-  if (bh < 4) return;
-  for (int y = by0; y < by1; ++y) {
-    double t = (by1 - y - 0.5) / bh;
-    hoc_canvas_rect(c, bx0, y, bx1, y + 1, hoc_render_colormap(t), 1);
-  }
-  hoc_canvas_frame(c, bx0 - 1, by0 - 1, bx1 + 1, by1 + 1, 1, HOC_RENDER_INK);
-  const char *name = "q";
-  hoc_canvas_text(c, bx0 + (bx1 - bx0 - hoc_text_width(name, ls)) / 2,
-                  by0 - HOC_FONT_LINE * ls - pad, name, ls, HOC_RENDER_INK);
-  double range = sc->hi - sc->lo;
-  static const double steps[] = {0.05, 0.1, 0.2, 0.25, 0.5, 1};
-  double step = 1;
-  for (size_t i = 0; i < sizeof steps / sizeof *steps; ++i) {
-    double m = range / steps[i];
-    if (m <= 10.5 && bh / m >= 2.5 * HOC_FONT_LINE * ls) {
-      step = steps[i];
-      break;
-    }
-  }
-  int nt = (int)lround(range / step);
-  if (fabs(nt * step - range) > 1e-9) nt = 1, step = range; /* only the ends */
-  for (int i = 0; i <= nt; ++i) {
-    double v = sc->lo + i * step;
-    int y = by1 - (int)lround((v - sc->lo) / range * bh);
-    char label[32];
-    format_q(label, sizeof label, v);
-    hoc_canvas_rect(c, bx1, y - (ls + 1) / 2, bx1 + pad, y - (ls + 1) / 2 + ls, HOC_RENDER_INK, 1);
-    hoc_canvas_text(c, bx1 + pad + pad / 2, y - HOC_FONT_ASCENT * ls / 2, label, ls,
-                    HOC_RENDER_INK);
-  }
-  if (sc->tangled) {
-    int y = by1 + 3 * pad;
-    hoc_canvas_rect(c, bx0, y, bx1, y + bx1 - bx0, HOC_RENDER_TANGLED, 1);
-    hoc_canvas_frame(c, bx0 - 1, y - 1, bx1 + 1, y + bx1 - bx0 + 1, 1, HOC_RENDER_INK);
-    hoc_canvas_text(c, bx1 + pad + pad / 2, y + (bx1 - bx0 - HOC_FONT_ASCENT * ls) / 2, "tangled",
-                    ls, HOC_RENDER_INK);
-  }
-}
-
 /* Bands ------------------------------------------------------------------- */
 
 /* Whether element e stands wholly in front of the near clip (its corners). */
@@ -828,7 +618,7 @@ static void render_band(const render_ctx *ctx, int band, workspace *ws, hoc_canv
         p[3] = (unsigned char)((sum[3] + SS * SS / 2) / (SS * SS));
       }
     }
-  draw_overlays(ctx, out);
+  hoc_render_draw_overlays(ctx, out);
 }
 
 /* Entry point ------------------------------------------------------------- */
@@ -927,7 +717,7 @@ hoc_status hoc_render_png(const char *path, const hoc_render_mesh *views, int n_
       zw = max2(zw, dot3(m->xyz + 3 * cn[i], ctx.dir) - ctx.fz);
     ctx.zclip = zw + max2(frame[1] - frame[0], frame[3] - frame[2]);
   }
-  HOC_TRY_GOTO(find_markers(&ctx), done);
+  HOC_TRY_GOTO(hoc_render_find_markers(&ctx), done);
 
   /* subdivision and evaluation table of each view */
   for (int k = 0; k < n_views; ++k) {
