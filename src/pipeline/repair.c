@@ -234,7 +234,7 @@ hoc_status hoc_repair_split_first(const hoc_run *run, hoc_stages *r, hoc_mesh **
           ? hoc_run_event(run, HOC_EVENT_REPAIR,
                           "the tangled elements are on faces that fold (their normal reverses "
                           "inside them), which a finer mesh crosses with more elements: "
-                          "splitting them at most %d time(s) per chain instead of meshing the "
+                          "at most %d split(s) per chain instead of meshing the "
                           "faces again (the result with the fewest tangled is kept)",
                           HOC_PIPELINE_FOLD_SPLITS)
           : hoc_run_event(run, HOC_EVENT_REPAIR,
@@ -528,9 +528,9 @@ hoc_status hoc_repair_linear(const hoc_run *run, hoc_model *model, const hoc_lin
   if (!count[HOC_INVERTED_ON_CAD]) goto done;
   HOC_TRY_GOTO(kind_faces(*lin, kind, HOC_INVERTED_ON_CAD, faces, sizeof faces), done);
   HOC_TRY_GOTO(hoc_run_event(run, HOC_EVENT_REPAIR,
-                             "%zu linear element(s) inverted on the CAD: meshing their faces "
-                             "again with gmsh's MeshAdapt and Delaunay algorithms (per face, "
-                             "the mesh with the fewest is kept): faces%s",
+                             "%zu linear element(s) inverted on the CAD: their faces' linear "
+                             "meshes made with gmsh's MeshAdapt and Delaunay algorithms too "
+                             "(per face, the mesh with the fewest is kept): faces%s",
                              count[HOC_INVERTED_ON_CAD], faces),
                done);
   HOC_ALLOC_GOTO(best, (size_t)nf + 1, done);
