@@ -188,7 +188,6 @@ static hoc_status coarse_start(const hoc_run *run, hoc_stages *r, const hoc_mesh
                         HOC_PIPELINE_COARSE_ORDER));
   /* the direct raise is measured already: made again only if needed */
   hoc_mesh_destroy(ho);
-  double t0 = hoc_pipeline_now();
   HOC_TRY_GOTO(hoc_mesh_elevate(lin, HOC_PIPELINE_COARSE_ORDER, o->nodeset, &coarse), done);
   HOC_TRY_GOTO(hoc_repair_optimize(run, r, "coarse", coarse, NULL), done);
   if (hoc_stages_last(r)->stage.stats.tangled) {
@@ -201,7 +200,7 @@ static hoc_status coarse_start(const hoc_run *run, hoc_stages *r, const hoc_mesh
     HOC_TRY_GOTO(hoc_mesh_elevate(lin, o->order, o->nodeset, ho), done);
     goto done;
   }
-  t0 = hoc_pipeline_now();
+  double t0 = hoc_pipeline_now();
   HOC_TRY_GOTO(hoc_mesh_elevate(coarse, o->order, o->nodeset, &raised), done);
   HOC_TRY_GOTO(hoc_run_stage(run, r, "re-raised", raised, hoc_pipeline_now() - t0, NULL, NULL),
                done);
@@ -209,7 +208,6 @@ static hoc_status coarse_start(const hoc_run *run, hoc_stages *r, const hoc_mesh
   *ho = raised;
   raised = NULL;
 done:
-  (void)t0;
   hoc_mesh_destroy(&raised);
   hoc_mesh_destroy(&coarse);
   return status;
