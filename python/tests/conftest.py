@@ -15,7 +15,6 @@ SOURCE = os.environ.get("HOCAD_SOURCE_DIR") or os.path.dirname(
 MODELS = os.path.join(SOURCE, "examples", "models")
 DATA = os.path.join(SOURCE, "tests", "data")
 SCREW = os.path.join(MODELS, "screw.step")
-SANITIZED = os.environ.get("HOCAD_SANITIZE") == "1"
 
 
 def close_all_models():
