@@ -24,7 +24,9 @@ the linear mesh's min q, unless hocad's finding says every element below
 that bound has a corner at a CAD cusp (when only some have, the elements at
 no cusp must meet it); final mean q >= linear mean q - 0.02; with --cad (the
 output of `hocad quality` on the written mesh), the farthest node within
-1e-9 of the model's size from the CAD. The report's linear stage is the
+1e-9 of the model's size from the CAD; at order 3, at most 5 s per 10^4
+elements of hocad's own time (the wall time less the CAD import and gmsh's
+linear meshing, which the report times). The report's linear stage is the
 last one (after a remeshing the stages are those of the last attempt); the
 final stage is the last.
 """
@@ -37,10 +39,11 @@ import sys
 POOR = 0.9        # min q bound: this fraction of the linear mesh's min q
 MEAN_DROP = 0.02  # mean q bound: at most this below the linear mesh's mean q
 ON_CAD = 1e-9     # farthest node from the CAD, relative to the model's size
+SLOW = 5.0        # at order 3: at most this many seconds of hocad's own time per 10^4 elements
 
 RUN_COLUMNS = ["model", "p", "elements", "tangled raised", "tangled final",
                "min q linear -> final", "mean q linear -> final", "bounds",
-               "wall s", "s / 1e4 el", "peak MB", "exit"]
+               "wall s", "CAD + linear s", "hocad s / 1e4 el", "peak MB", "exit"]
 HARD_COLUMNS = ["model (hard/)", "exit", "message", "verdict"]
 
 
@@ -155,6 +158,12 @@ def cmd_run(a):
                 reasons.append("CAD check failed: " + first_message(read_text(a.cad)))
             elif not d <= ON_CAD:
                 reasons.append("node %.2g of the size off the CAD" % d)
+        # gmsh's part: the import and the linear meshing (every linear stage)
+        gmsh_s = report.get("model_seconds", 0) + sum(
+            st.get("seconds", 0) for st in stages if st.get("name") == "linear")
+        rate = max(a.wall - gmsh_s, 0) / ne * 1e4 if ne else 0
+        if a.order == 3 and rate > SLOW:
+            reasons.append("%.1f s / 1e4 el at order 3 > %g" % (rate, SLOW))
         extra = []
         if report.get("remeshings"):
             extra.append("%d remeshed" % report["remeshings"])
@@ -168,12 +177,12 @@ def cmd_run(a):
         cells = [a.model, a.order, ne, raised["tangled"] if raised else "-", fin["tangled"],
                  "%.4f -> %.4f" % (lin["min"], fin["min"]),
                  "%.4f -> %.4f" % (lin["mean"], fin["mean"]),
-                 verdict, wall, "%.2f" % (a.wall / ne * 1e4) if ne else "-", rss, a.exit]
+                 verdict, wall, "%.1f" % gmsh_s, "%.2f" % rate if ne else "-", rss, a.exit]
     else:
         if not reasons:
             reasons.append("no report written")
         verdict = "; ".join(reasons)
-        cells = [a.model, a.order, "-", "-", "-", "-", "-", verdict, wall, "-", rss, a.exit]
+        cells = [a.model, a.order, "-", "-", "-", "-", "-", verdict, wall, "-", "-", rss, a.exit]
     row(cells)
     if a.why:
         with open(a.why, "w") as f:
