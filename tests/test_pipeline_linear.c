@@ -13,6 +13,7 @@
  * SPDX-License-Identifier: GPL-2.0-or-later */
 #include "hocad.h"
 #include "mesh/mesh.h"
+#include "pipeline/pipeline.h"
 #include "test_util.h"
 
 #include <stdio.h>
@@ -26,7 +27,7 @@
 #define BLADE_SIZE 46.0
 
 typedef struct seen {
-  int repair_inverted, meshed_again, fold_note, fold_split, remeshed;
+  int repair_inverted, meshed_again, fold_note, fold_split, remeshed, each_across;
 } seen;
 
 static int on_event(void *user, const hoc_event *ev) {
@@ -39,6 +40,7 @@ static int on_event(void *user, const hoc_event *ev) {
   if (ev->kind == HOC_EVENT_NOTE && strstr(ev->message, "cross a fold of their face"))
     s->fold_note++;
   if (ev->kind == HOC_EVENT_REPAIR && strstr(ev->message, "on faces that fold")) s->fold_split++;
+  if (ev->kind == HOC_EVENT_NOTE && strstr(ev->message, "each cross a fold")) s->each_across++;
   if (ev->kind == HOC_EVENT_REPAIR && strstr(ev->message, "with edges half as long")) s->remeshed++;
   return 0;
 }
@@ -160,15 +162,56 @@ static void test_folded_face(void) {
          r ? hoc_report_tangled(r) : 0, r ? hoc_report_refinements(r) : -1,
          r ? hoc_report_remeshings(r) : -1);
   CHECK(s.fold_note == 1);
-  /* tangled elements on the folded face are split, never meshed again */
-  if (r && hoc_report_tangled(r)) CHECK(s.fold_split == 1);
+  /* tangled elements on the folded face are split, never meshed again;
+   * when each of them crosses the fold itself, not even split */
+  if (r && hoc_report_tangled(r)) CHECK(s.fold_split + s.each_across == 1);
+  printf("folded face: %d split chain(s) tried, %d note(s) that each tangled element crosses "
+         "the fold\n",
+         s.fold_split, s.each_across);
   CHECK(s.remeshed == 0 && r && hoc_report_remeshings(r) == 0);
   hoc_report_destroy(&r);
   hoc_mesh_destroy(&mesh);
   hoc_model_destroy(&model);
 }
 
+/* The rule that tries no split or remeshing for tangled elements that
+ * each cross a fold of their face: a grid on a square folded along
+ * v = 0.37 (phi = (u, w^2, w^3), w = v - 0.37) has its elements across
+ * the fold tangled, each one across it; on a plain square nothing. */
+static void test_each_across_a_fold(void) {
+  hoc_run run;
+  hoc_mesh_options_default(&run.o);
+  const hoc_analytic_kind kinds[2] = {HOC_ANALYTIC_FOLD, HOC_ANALYTIC_PLANE};
+  for (int k = 0; k < 2; ++k) {
+    hoc_model *model = NULL;
+    CHECK_OK(hoc_cad_create_analytic(kinds[k], 1, 0.37, &model));
+    hoc_mesh *lin = NULL;
+    if (model) CHECK_OK(hoc_mesh_grid_linear(model, 5, 5, &lin));
+    if (!lin) {
+      hoc_model_destroy(&model);
+      continue;
+    }
+    size_t ne = hoc_mesh_num_elements(lin), n_tangled = 0;
+    unsigned char *tangled = calloc(ne, 1);
+    CHECK(tangled != NULL);
+    if (tangled) CHECK_OK(hoc_mesh_measure(lin, run.o.measure, NULL, tangled, NULL));
+    for (size_t e = 0; tangled && e < ne; ++e)
+      n_tangled += tangled[e] != 0;
+    int all = -1;
+    size_t across = 99;
+    CHECK_OK(hoc_repair_tangled_on_folds(&run, lin, &all, &across));
+    printf("%s: %zu elements, %zu tangled, %zu each across a fold, all on folded faces %d\n",
+           k == 0 ? "folded square" : "plain square", ne, n_tangled, across, all);
+    if (k == 0) CHECK(n_tangled > 0 && across == n_tangled && all == 1);
+    else CHECK(n_tangled == 0 && across == 0 && all == 0);
+    free(tangled);
+    hoc_mesh_destroy(&lin);
+    hoc_model_destroy(&model);
+  }
+}
+
 int main(void) {
+  test_each_across_a_fold();
   test_blade();
   test_folded_face();
   return test_report();

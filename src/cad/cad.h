@@ -159,9 +159,12 @@ typedef enum hoc_analytic_kind {
   HOC_ANALYTIC_SPHERE,   /* radius a: phi = a (cos v cos u, cos v sin u, sin v), u in [0,2pi], v in [-pi/2,pi/2] */
   HOC_ANALYTIC_CYLINDER, /* radius a, height b: phi = (a cos u, a sin u, v), u in [0,2pi], v in [0,b] */
   HOC_ANALYTIC_TORUS,    /* radii a > b: phi = ((a + b cos v) cos u, (a + b cos v) sin u, b sin v) */
-  HOC_ANALYTIC_CONE      /* base radius a, height b, apex at the origin: phi = (k v cos u,
+  HOC_ANALYTIC_CONE,     /* base radius a, height b, apex at the origin: phi = (k v cos u,
                             k v sin u, v) with k = a / b, u in [0,2pi], v in [0,b]; its apex is a
                             pole where the normal depends on the direction of approach */
+  HOC_ANALYTIC_FOLD      /* a square [0,a]^2 that folds along v = b (0 < b < a): phi = (u,
+                            w^2, w^3), w = v - b; phi_u x phi_v = (0, -3w^2, 2w) vanishes on
+                            the fold and reverses across it (a cuspidal edge) */
 } hoc_analytic_kind;
 
 /** One analytic face (tag 1) with its seam/pole curves and vertices, thread-safe. */

@@ -1,6 +1,7 @@
 /* Analytic CAD models with exact evaluation, for tests: a plane square, a
  * sphere (seam + two poles), a cylinder (seam), a torus (two seams) and a
- * cone (seam + a pole at its apex, where the surface has no tangent plane).
+ * cone (seam + a pole at its apex, where the surface has no tangent plane)
+ * and a square that folds along a line of its parameters.
  * Each has one face (tag 1) and the curves and vertices of its boundary.
  * SPDX-License-Identifier: GPL-2.0-or-later */
 #include "cad/cad.h"
@@ -47,6 +48,12 @@ static void face_point(const analytic *s, double u, double v, double *x, double 
     X[0] = k * v * cu, X[1] = k * v * su, X[2] = v;
     U[0] = -k * v * su, U[1] = k * v * cu, U[2] = 0;
     V[0] = k * cu, V[1] = k * su, V[2] = 1;
+  } break;
+  case HOC_ANALYTIC_FOLD: {
+    double w = v - b;
+    X[0] = u, X[1] = w * w, X[2] = w * w * w;
+    U[0] = 1, U[1] = 0, U[2] = 0;
+    V[0] = 0, V[1] = 2 * w, V[2] = 3 * w * w;
   } break;
   case HOC_ANALYTIC_TORUS:
   default: {
@@ -108,6 +115,10 @@ static void face_inverse(const analytic *s, const double *x, double *uv) {
   case HOC_ANALYTIC_PLANE:
     uv[0] = x[0];
     uv[1] = x[1];
+    break;
+  case HOC_ANALYTIC_FOLD:
+    uv[0] = x[0];
+    uv[1] = s->b + cbrt(x[2]);
     break;
   case HOC_ANALYTIC_SPHERE:
     uv[0] = rho > 0 ? u : 0;
@@ -187,12 +198,14 @@ hoc_status hoc_cad_create_analytic(hoc_analytic_kind kind, double a, double b,
   *model = NULL;
   HOC_CHECK(isfinite(a) && a > 0, HOC_ERR_ARGUMENT, "analytic surface size must be > 0");
   HOC_CHECK(kind == HOC_ANALYTIC_PLANE || kind == HOC_ANALYTIC_SPHERE ||
-                (isfinite(b) && b > 0 && (kind != HOC_ANALYTIC_TORUS || b < a)),
+                (isfinite(b) && b > 0 && (kind != HOC_ANALYTIC_TORUS || b < a) &&
+                 (kind != HOC_ANALYTIC_FOLD || b < a)),
             HOC_ERR_ARGUMENT, "invalid second size of the analytic surface");
   const double pi = 0.5 * TWO_PI;
   int nc = 0, nv = 0;
   switch (kind) {
   case HOC_ANALYTIC_PLANE: nc = 4, nv = 4; break;
+  case HOC_ANALYTIC_FOLD: nc = 4, nv = 4; break;
   case HOC_ANALYTIC_SPHERE: nc = 3, nv = 2; break;
   case HOC_ANALYTIC_CYLINDER: nc = 3, nv = 2; break;
   case HOC_ANALYTIC_CONE: nc = 3, nv = 2; break;
@@ -229,6 +242,22 @@ hoc_status hoc_cad_create_analytic(hoc_analytic_kind kind, double a, double b,
     face_point(s, a, a, m->vertices[2].xyz, NULL, NULL);
     face_point(s, 0, a, m->vertices[3].xyz, NULL, NULL);
     m->bbox[3] = m->bbox[4] = a;
+    break;
+  case HOC_ANALYTIC_FOLD:
+    snprintf(f->type, sizeof f->type, "Folded square");
+    f->lo[0] = f->lo[1] = 0;
+    f->hi[0] = f->hi[1] = a;
+    set_curve(m, 0, 0, a, 0, 1, s, 0, 0, 1, 0); /* v = 0 */
+    set_curve(m, 1, 0, a, 1, 2, s, a, 0, 0, 1); /* u = a */
+    set_curve(m, 2, 0, a, 3, 2, s, 0, a, 1, 0); /* v = a */
+    set_curve(m, 3, 0, a, 0, 3, s, 0, 0, 0, 1); /* u = 0 */
+    face_point(s, 0, 0, m->vertices[0].xyz, NULL, NULL);
+    face_point(s, a, 0, m->vertices[1].xyz, NULL, NULL);
+    face_point(s, a, a, m->vertices[2].xyz, NULL, NULL);
+    face_point(s, 0, a, m->vertices[3].xyz, NULL, NULL);
+    m->bbox[0] = 0, m->bbox[3] = a;
+    m->bbox[1] = 0, m->bbox[4] = fmax(b * b, (a - b) * (a - b));
+    m->bbox[2] = -b * b * b, m->bbox[5] = (a - b) * (a - b) * (a - b);
     break;
   case HOC_ANALYTIC_SPHERE:
     snprintf(f->type, sizeof f->type, "Sphere");

@@ -291,7 +291,16 @@ static hoc_status mesh_model_run(const hoc_run *run, hoc_model *model, model_mes
      * is kept if it leaves none tangled (the bottle at order 2: two
      * elements at its thread's end, which two remeshings only make worse) */
     int split_done = 0, across_folds = 0;
-    HOC_TRY_GOTO(hoc_repair_tangled_on_folds(run, m->ho, &across_folds), done);
+    size_t each_across = 0;
+    HOC_TRY_GOTO(hoc_repair_tangled_on_folds(run, m->ho, &across_folds, &each_across), done);
+    if (each_across) {
+      status = hoc_run_event(run, HOC_EVENT_NOTE,
+                             "the %zu tangled element(s) each cross a fold of their face, where "
+                             "its normal reverses: no split or finer mesh untangles them, so "
+                             "none is tried",
+                             each_across);
+      break;
+    }
     status = hoc_repair_split_first(run, r, &m->ho, across_folds, &split_done);
     *final = m->ho;
     if (status != HOC_OK || split_done) break;
