@@ -49,7 +49,9 @@ static size_t mark_fragile(hoc_opt *o) {
  *                   elements still tangled: half as many sweeps again from
  *                   the best state reached, the (u, v) rule relaxed too
  *                   (relaxed_uv in step.c). At most one before the exact
- *                   phase and one from its start on.
+ *                   phase and one from its start on (none from
+ *                   HOC_OPT_EXACT_RELAX_UV_MIN_ORDER, where the exact
+ *                   phase relaxes the (u, v) rule from its start).
  *   EXACT           the samples' verdict is in, but the exact fold tests of
  *                   measuring find more elements tangled: sweeps with the
  *                   exact tests in every verdict and dense edge residuals.
@@ -90,6 +92,7 @@ typedef struct run {
   int stalled;               /* sweeps in a row without fewer tangled (the delta cycle) */
   int cut;                   /* this attempt was ended before its sweeps ran out */
   int smoothing;             /* the smoothing phase has begun */
+  int second;                /* the sweeps are a second attempt's */
   /* free part of f and smallest q of the last sweeps, at [sweep % size] */
   double hist_f[HOC_OPT_STAGNATION_SWEEPS + 1], hist_q[HOC_OPT_STAGNATION_SWEEPS + 1];
 } run;
@@ -265,7 +268,7 @@ static hoc_status run_sweeps(run *r, int *used_up) {
     if (r->opts.progress) {
       hoc_optimize_iteration info = {r->it,  r->f,  r->qmin,
                                      r->tangled, moved, hoc_opt_now() - r->t0,
-                                     1 + o->cfg.relax_uv};
+                                     1 + r->second};
       if (r->opts.progress(r->opts.progress_user, &info))
         return HOC_ERROR(HOC_ERR_INTERRUPTED, "optimisation interrupted");
     }
@@ -297,6 +300,7 @@ static hoc_status second_attempt(run *r, int *started) {
   *started = r->tangled && !o->cfg.relax_uv && r->best.tangled != SIZE_MAX && !o->adj.touched;
   if (!*started) return HOC_OK;
   o->cfg.relax_uv = 1;
+  r->second = 1;
   o->cfg.eps = HOC_OPT_EPS;
   new_attempt(r, HOC_OPT_LATER_SWEEPS(r->opts.max_iterations));
   hoc_opt_wake_all(o);
@@ -326,7 +330,11 @@ static hoc_status exact_phase(run *r, phase *next) {
   HOC_TRY(hoc_opt_snapshot_take(&r->best, r->mesh, r->tangled, r->f));
   r->fewest = r->tangled;
   r->res.converged = 0;
-  o->cfg.relax_uv = 0;
+  /* from HOC_OPT_EXACT_RELAX_UV_MIN_ORDER (tunables.h) the (u, v) rule is
+   * relaxed from the phase's start, as in a second attempt, which then
+   * has nothing left to relax and is not made */
+  o->cfg.relax_uv = r->mesh->order >= HOC_OPT_EXACT_RELAX_UV_MIN_ORDER;
+  r->second = 0;
   o->cfg.eps = HOC_OPT_EPS;
   new_attempt(r, HOC_OPT_LATER_SWEEPS(r->opts.max_iterations));
   *next = PHASE_EXACT; /* (each sweep wakes the nodes around the folds) */

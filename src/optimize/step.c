@@ -125,11 +125,12 @@ static int relaxed(const hoc_opt *o, size_t e) {
          (o->m->order <= HOC_OPT_PROTECT_MAX_ORDER || o->cfg.exact);
 }
 
-/* In the second attempt (relax_uv), relaxed elements on a face's boundary
- * may also fold in (u, v): on a regular parametrisation that is the same
- * fold as in 3D, and the (u, v) rule would otherwise hold them where the 3D
- * rule lets go. Not on faces with a pole, where (u, v) folds without the
- * surface folding. Only in a second attempt: from the start, on thin parts
+/* In the second attempt (relax_uv), and from HOC_OPT_EXACT_RELAX_UV_MIN_ORDER
+ * in the exact phase, relaxed elements on a face's boundary may also fold
+ * in (u, v): on a regular parametrisation that is the same fold as in 3D,
+ * and the (u, v) rule would otherwise hold them where the 3D rule lets go.
+ * Not on faces with a pole, where (u, v) folds without the surface
+ * folding. Not in the sampled phase's first attempt: there, on thin parts
  * at high orders, it trades one fold for several. */
 static int relaxed_uv(const hoc_opt *o, size_t e) {
   if (!o->cfg.relax_uv || !relaxed(o, e)) return 0;

@@ -103,6 +103,22 @@
  * fragile elements. */
 #define HOC_OPT_PROTECT_MAX_ORDER 5
 
+/* From this order on, the exact phase relaxes the (u, v) rule from its
+ * start, as the second attempt does (relaxed_uv in step.c). Its folds are
+ * those the samples missed, mostly in elements on a face's boundary (a
+ * plane's edge along a curved CAD curve, between the teeth of a gear):
+ * the raised regularisation lets their neighbourhood pass through
+ * sigma = 0 in 3D while the (u, v) rule holds the same nodes, so the
+ * phase's sweeps stall until HOC_OPT_EXACT_STALL_SWEEPS end them and the
+ * second attempt relaxes the rule anyway. At order 10 each of those
+ * sweeps tests its elements exactly (p^4 each): gear_f360 spends 16
+ * sweeps, over half its time, so. The exact tests see every fold the
+ * relaxed elements make, so the reason the sampled phase keeps the rule
+ * (it trades one fold for several between the samples) does not hold
+ * here. Not below: orders up to PROTECT_MAX_ORDER have the protected run
+ * and their exact sweeps cost little. */
+#define HOC_OPT_EXACT_RELAX_UV_MIN_ORDER 6
+
 /* Above PROTECT_MAX_ORDER, in a whole-mesh run, a valid element with q
  * below this is fragile: no step may fold it between the samples. Thin
  * valid elements (aspect 20-50: a strip of needles across a narrow face,
