@@ -176,10 +176,22 @@ static hoc_status find_tangled(hoc_report *report, const hoc_mesh *mesh, const d
   for (size_t e = 0; e < ne; ++e)
     total += q[e] == 0.0;
   if (!total) return HOC_OK;
+  /* elements across a fold of their face: no finer mesh avoids those */
+  size_t across = 0;
+  for (size_t e = 0; e < ne; ++e) {
+    int folds = 0;
+    if (q[e] == 0.0 && hoc_mesh_element_folds(mesh, e, &folds) == HOC_OK) across += folds;
+  }
   text t = {0};
   const hoc_stage *s = opt ? &opt->stage : NULL;
-  if (opt && !s->converged && opt->result.stopped_at_limit && s->iterations >= 10 &&
-      2 * opt->result.best_iteration <= s->iterations)
+  if (across == total)
+    text_add(&t,
+             "%zu element(s) tangled across a fold of their face, where its normal phi_u x "
+             "phi_v reverses (the CAD face folds on itself): no mesh of the face untangles "
+             "them:",
+             total);
+  else if (opt && !s->converged && opt->result.stopped_at_limit && s->iterations >= 10 &&
+           2 * opt->result.best_iteration <= s->iterations)
     text_add(&t,
              "%zu element(s) could not be untangled with this linear mesh (the fewest tangled "
              "since iteration %d of %d; %s):",
@@ -200,13 +212,7 @@ static hoc_status find_tangled(hoc_report *report, const hoc_mesh *mesh, const d
       ++shown;
     }
   text_add(&t, "%s", total > shown ? " ..." : "");
-  /* elements across a fold of their face: no finer mesh avoids those */
-  size_t across = 0;
-  for (size_t e = 0; e < ne; ++e) {
-    int folds = 0;
-    if (q[e] == 0.0 && hoc_mesh_element_folds(mesh, e, &folds) == HOC_OK) across += folds;
-  }
-  if (across)
+  if (across && across < total)
     text_add(&t,
              "; %zu of them cross a fold of their face, where its normal phi_u x phi_v "
              "reverses, which every mesh of that face crosses",
