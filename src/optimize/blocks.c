@@ -14,6 +14,13 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* The items of a list, its spare capacity returned (the lists grow by
+ * doubling: up to half of a large mesh's block lists would be spare). */
+static void *fit(void *v, size_t n, size_t size) {
+  void *w = hoc_realloc(v, n ? n : 1, size);
+  return w ? w : v; /* (a failed shrink keeps the larger block) */
+}
+
 /* Blocks of family 0: vertices, edges, element interiors; of family 1:
  * single nodes. Their nodes, footprints, unknowns and carried nodes. */
 hoc_status hoc_opt_build_blocks(hoc_opt *o, int family) {
@@ -76,8 +83,8 @@ hoc_status hoc_opt_build_blocks(hoc_opt *o, int family) {
   size_t nb = start.n;
   B->n_blocks = nb;
   HOC_TRY_GOTO(hoc_grow_push(&start, nodes.n), done);
-  B->bn_start = start.v;
-  B->bn_node = nodes.v;
+  B->bn_start = fit(start.v, start.n, sizeof *start.v);
+  B->bn_node = fit(nodes.v, nodes.n, sizeof *nodes.v);
   start.v = nodes.v = NULL;
   /* unknowns */
   B->bd_start = hoc_calloc(nb + 1, sizeof *B->bd_start);
@@ -110,8 +117,8 @@ hoc_status hoc_opt_build_blocks(hoc_opt *o, int family) {
       }
     }
     if (status == HOC_OK) status = hoc_grow_push(&fs, fe.n);
-    B->be_start = fs.v;
-    B->be_elem = fe.v;
+    B->be_start = status == HOC_OK ? fit(fs.v, fs.n, sizeof *fs.v) : fs.v;
+    B->be_elem = status == HOC_OK ? fit(fe.v, fe.n, sizeof *fe.v) : fe.v;
     if (status != HOC_OK) goto done;
   }
   /* carried nodes of face-interior vertex blocks */
@@ -159,9 +166,9 @@ hoc_status hoc_opt_build_blocks(hoc_opt *o, int family) {
     }
     free(last);
     if (status == HOC_OK) status = hoc_grow_push(&cs, cn.n);
-    B->carry_start = cs.v;
-    B->carry_node = cn.v;
-    B->carry_w = w;
+    B->carry_start = status == HOC_OK ? fit(cs.v, cs.n, sizeof *cs.v) : cs.v;
+    B->carry_node = status == HOC_OK ? fit(cn.v, cn.n, sizeof *cn.v) : cn.v;
+    B->carry_w = status == HOC_OK && w ? fit(w, cn.n, sizeof *w) : w;
     if (status != HOC_OK) goto done;
   }
   /* colours: blocks touching a common element differ; every element's

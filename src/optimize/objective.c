@@ -35,9 +35,11 @@ void hoc_opt_frames_trial(const hoc_opt *o, size_t e, const double *fr, double *
   for (size_t i = 0; i < np; ++i) {
     if (!o->node.moving[cn[i]]) continue;
     double dx[3], dn[3];
+    const double *tx = hoc_opt_txyz(o, cn[i]),
+                 *tn = o->trial.tnormal + 3 * hoc_opt_tslot(o, cn[i], sl[i]);
     for (int c = 0; c < 3; ++c) {
-      dx[c] = o->trial.txyz[3 * cn[i] + c] - m->xyz[3 * cn[i] + c];
-      dn[c] = o->trial.tnormal[3 * sl[i] + c] - o->node.normal[3 * sl[i] + c];
+      dx[c] = tx[c] - m->xyz[3 * cn[i] + c];
+      dn[c] = tn[c] - o->node.normal[3 * sl[i] + c];
     }
     hoc_element_frames_move(o->t, from, (int)i, dx, dn, out);
     from = out;
@@ -71,8 +73,10 @@ void hoc_opt_gather(const hoc_opt *o, size_t e, double *x, double *n) {
   const size_t *cn = m->conn + e * np, *sl = m->elem_slot + e * np;
   for (size_t i = 0; i < np; ++i) {
     int mv = o->node.moving[cn[i]];
-    memcpy(x + 3 * i, (mv ? o->trial.txyz : m->xyz) + 3 * cn[i], 3 * sizeof *x);
-    memcpy(n + 3 * i, (mv ? o->trial.tnormal : o->node.normal) + 3 * sl[i], 3 * sizeof *n);
+    memcpy(x + 3 * i, mv ? hoc_opt_txyz(o, cn[i]) : m->xyz + 3 * cn[i], 3 * sizeof *x);
+    memcpy(n + 3 * i,
+           mv ? o->trial.tnormal + 3 * hoc_opt_tslot(o, cn[i], sl[i]) : o->node.normal + 3 * sl[i],
+           3 * sizeof *n);
   }
 }
 

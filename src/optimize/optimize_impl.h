@@ -149,11 +149,19 @@ typedef struct hoc_opt_trial {
   unsigned char *state; /* [n_blocks] 0 idle, 1 trying, 2 accepted */
   size_t *list;         /* [n_blocks] scratch */
   size_t *committed;    /* [n_blocks] blocks of the current colour that moved */
-  double *tpar;         /* [n_nodes][2] trial parameters */
-  double *txyz;         /* [n_nodes][3] */
-  double *tdz;          /* [n_nodes][6] */
-  double *tslot_uv;     /* [n_slots][2] */
-  double *tnormal;      /* [n_slots][3] */
+  /* The trial state of the nodes being tried (a colour's blocks, a polish
+   * move): node k's at index tix[k] of the arrays below, its slots from
+   * tsbase[tix[k]] on, in the order of adj.ns_slot (hoc_opt_trial_reserve).
+   * Sized for the nodes of one trial, not the mesh: at high orders the
+   * mesh's nodes and slots are many, a colour's a small share of them. */
+  uint32_t *tix;        /* [n_nodes] the node's index in the current trial */
+  size_t cap, scap;     /* nodes and slots the arrays hold */
+  double *tpar;         /* [cap][2] trial parameters */
+  double *txyz;         /* [cap][3] */
+  double *tdz;          /* [cap][6] */
+  size_t *tsbase;       /* [cap] first trial slot of the node */
+  double *tslot_uv;     /* [scap][2] */
+  double *tnormal;      /* [scap][3] */
 } hoc_opt_trial;
 
 /* Frames of elements (hoc_element_frames: D phi's columns and the
@@ -291,6 +299,26 @@ hoc_status hoc_opt_sweep_start(hoc_opt *o, double *objective, double *min_q, siz
 hoc_status hoc_opt_screen(hoc_opt *o);
 
 /* trial.c: trial parameters, CAD evaluation, acceptance ----------------- */
+
+/* Trial state for nodes[0..n) (no node twice): node nodes[a] at index a. */
+hoc_status hoc_opt_trial_reserve(hoc_opt *o, const size_t *nodes, size_t n);
+/* Node k's trial parameters [2], position [3], derivatives [6] (k reserved). */
+static inline double *hoc_opt_tpar(const hoc_opt *o, size_t k) {
+  return o->trial.tpar + 2 * (size_t)o->trial.tix[k];
+}
+static inline double *hoc_opt_txyz(const hoc_opt *o, size_t k) {
+  return o->trial.txyz + 3 * (size_t)o->trial.tix[k];
+}
+static inline double *hoc_opt_tdz(const hoc_opt *o, size_t k) {
+  return o->trial.tdz + 6 * (size_t)o->trial.tix[k];
+}
+/* The trial index of slot s of reserved node k (a face node has one slot,
+ * a curve node one per face around it). */
+static inline size_t hoc_opt_tslot(const hoc_opt *o, size_t k, size_t s) {
+  size_t j = o->adj.ns_start[k];
+  while (o->adj.ns_slot[j] != s) ++j;
+  return o->trial.tsbase[o->trial.tix[k]] + (j - o->adj.ns_start[k]);
+}
 
 /* (u, v) of node k's copy kk in element e in the trial state. */
 void hoc_opt_trial_elem_uv(const hoc_opt *o, size_t k, size_t e, int kk, double *uv);

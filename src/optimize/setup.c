@@ -30,7 +30,7 @@ void hoc_opt_free(hoc_opt *o) {
       o->adj.hsize,       o->node.active,  o->node.moving,  o->trial.step,      o->trial.alpha,
       o->trial.f0,        o->trial.fnew,   o->trial.slope,  o->trial.state,     o->trial.list,
       o->trial.committed, o->trial.tpar,   o->trial.txyz,   o->trial.tdz,       o->trial.tslot_uv,
-      o->trial.tnormal,   o->el.xvalid,    o->node.near,    o->el.near_e,       o->adj.touched,
+      o->trial.tnormal,   o->trial.tix,    o->trial.tsbase, o->el.xvalid,    o->node.near,    o->el.near_e,       o->adj.touched,
       o->el.has_fold,     o->el.fold_rs,   o->el.fragile,   o->fc.slot,         o->fc.pool};
   for (size_t i = 0; i < sizeof p / sizeof *p; ++i) free(p[i]);
 }
@@ -185,11 +185,8 @@ hoc_status hoc_opt_setup(hoc_opt *o, hoc_mesh *m, hoc_measure measure, int fix_c
   HOC_ALLOC(o->trial.state, nb + 1);
   HOC_ALLOC(o->trial.list, nb + 1);
   HOC_ALLOC(o->trial.committed, nb + 1);
-  HOC_ALLOC(o->trial.tpar, 2 * nn);
-  HOC_ALLOC(o->trial.txyz, 3 * nn);
-  HOC_ALLOC(o->trial.tdz, 6 * nn);
-  HOC_ALLOC(o->trial.tslot_uv, 2 * m->n_slots + 2);
-  HOC_ALLOC(o->trial.tnormal, 3 * m->n_slots + 3);
+  HOC_CHECK(nn < UINT32_MAX, HOC_ERR_ARGUMENT, "too many nodes (%zu) for the optimiser", nn);
+  HOC_ALLOC(o->trial.tix, nn + 1);
   /* local length: the longest edge of the linear sub-triangles around */
   for (size_t e = 0; e < ne; ++e) {
     const size_t *cn = m->conn + e * np;
@@ -206,6 +203,9 @@ hoc_status hoc_opt_setup(hoc_opt *o, hoc_mesh *m, hoc_measure measure, int fix_c
   return hoc_opt_frames_setup(o);
 }
 
+/* Nodes of one CAD evaluation call in hoc_opt_eval_all. */
+enum { EVAL_PIECE = 1024 };
+
 /* Derivatives dx/dz of every free node and the normals of every slot. */
 hoc_status hoc_opt_eval_all(hoc_opt *o) {
   hoc_mesh *m = o->m;
@@ -215,10 +215,8 @@ hoc_status hoc_opt_eval_all(hoc_opt *o) {
   int nf = o->model->n_faces, nc = o->model->n_curves;
   size_t *start = hoc_calloc((size_t)(nf + nc) + 1, sizeof *start);
   size_t *order = hoc_calloc(nn + 1, sizeof *order);
-  double *par = hoc_calloc(2 * nn + 2, sizeof *par), *a = hoc_calloc(3 * nn + 3, sizeof *a),
-         *b = hoc_calloc(3 * nn + 3, sizeof *b);
   hoc_status status = HOC_OK;
-  if (!start || !order || !par || !a || !b) {
+  if (!start || !order) {
     status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
     goto done;
   }
@@ -235,40 +233,46 @@ hoc_status hoc_opt_eval_all(hoc_opt *o) {
   }
   hoc_opt_csr_restore((size_t)(nf + nc), start);
   size_t *piece = NULL, n_pieces = 0;
-  HOC_TRY_GOTO(hoc_split_groups(start, nf + nc, 1024, &piece, &n_pieces), done);
+  HOC_TRY_GOTO(hoc_split_groups(start, nf + nc, EVAL_PIECE, &piece, &n_pieces), done);
   hoc_par_error err = {0};
-#pragma omp parallel for schedule(dynamic, 1) if (o->model->thread_safe)
-  for (size_t c = 0; c < n_pieces; ++c) {
-    int g = (int)piece[2 * c];
-    size_t first = piece[2 * c + 1], n = start[g + 1] - first < 1024 ? start[g + 1] - first : 1024;
-    const size_t *nodes = order + first;
-    /* this piece's part of the work arrays */
-    double *pp = par + 2 * first, *pa = a + 3 * first, *pb = b + 3 * first;
-    hoc_status st;
-    if (g < nf) {
-      for (size_t k = 0; k < n; ++k)
-        memcpy(pp + 2 * k, m->param + 2 * nodes[k], 2 * sizeof *pp);
-      st = hoc_cad_face_eval(o->model, g, n, pp, NULL, pa, pb);
-    } else {
-      for (size_t k = 0; k < n; ++k)
-        pp[k] = m->param[2 * nodes[k]];
-      st = hoc_cad_curve_eval(o->model, g - nf, n, pp, NULL, pa);
-      memset(pb, 0, 3 * n * sizeof *pb);
+#pragma omp parallel if (o->model->thread_safe)
+  {
+    /* each thread's work arrays for one piece (not the whole mesh's: at
+     * high orders they would be a large share of the optimiser's memory) */
+    double *pp = malloc(8 * EVAL_PIECE * sizeof *pp), *pa = pp ? pp + 2 * EVAL_PIECE : NULL,
+           *pb = pp ? pp + 5 * EVAL_PIECE : NULL;
+    if (!pp) hoc_par_error_catch(&err, HOC_ERROR(HOC_ERR_MEMORY, "out of memory"));
+#pragma omp for schedule(dynamic, 1)
+    for (size_t c = 0; c < n_pieces; ++c) {
+      if (!pp) continue;
+      int g = (int)piece[2 * c];
+      size_t first = piece[2 * c + 1],
+             n = start[g + 1] - first < EVAL_PIECE ? start[g + 1] - first : EVAL_PIECE;
+      const size_t *nodes = order + first;
+      hoc_status st;
+      if (g < nf) {
+        for (size_t k = 0; k < n; ++k)
+          memcpy(pp + 2 * k, m->param + 2 * nodes[k], 2 * sizeof *pp);
+        st = hoc_cad_face_eval(o->model, g, n, pp, NULL, pa, pb);
+      } else {
+        for (size_t k = 0; k < n; ++k)
+          pp[k] = m->param[2 * nodes[k]];
+        st = hoc_cad_curve_eval(o->model, g - nf, n, pp, NULL, pa);
+        memset(pb, 0, 3 * n * sizeof *pb);
+      }
+      hoc_par_error_catch(&err, st);
+      for (size_t k = 0; k < n && st == HOC_OK; ++k) {
+        memcpy(o->node.dz + 6 * nodes[k], pa + 3 * k, 3 * sizeof *pa);
+        memcpy(o->node.dz + 6 * nodes[k] + 3, pb + 3 * k, 3 * sizeof *pb);
+      }
     }
-    hoc_par_error_catch(&err, st);
-    for (size_t k = 0; k < n && st == HOC_OK; ++k) {
-      memcpy(o->node.dz + 6 * nodes[k], pa + 3 * k, 3 * sizeof *pa);
-      memcpy(o->node.dz + 6 * nodes[k] + 3, pb + 3 * k, 3 * sizeof *pb);
-    }
+    free(pp);
   }
   free(piece);
   status = hoc_par_error_raise(&err);
 done:
   free(start);
   free(order);
-  free(par);
-  free(a);
-  free(b);
   return status;
 }
 

@@ -275,13 +275,17 @@ hoc_status hoc_opt_do_color(hoc_opt *o, int color, hoc_opt_scratch *scr, int nth
     size_t ne_list = 0;
     for (size_t a = 0; a < nt; ++a) {
       size_t b = list[a];
-      for (int tries = 0; tries < HOC_OPT_RANGE_HALVINGS && !hoc_opt_set_trial_params(o, b);
-           ++tries)
-        o->trial.alpha[b] *= HOC_OPT_BACKTRACK;
       for (size_t c = o->B->bn_start[b]; c < o->B->bn_start[b + 1]; ++c)
         elist[ne_list++] = o->B->bn_node[c];
       for (size_t j = o->B->carry_start[b]; j < o->B->carry_start[b + 1]; ++j)
         elist[ne_list++] = o->B->carry_node[j];
+    }
+    HOC_TRY_GOTO(hoc_opt_trial_reserve(o, elist, ne_list), done);
+    for (size_t a = 0; a < nt; ++a) {
+      size_t b = list[a];
+      for (int tries = 0; tries < HOC_OPT_RANGE_HALVINGS && !hoc_opt_set_trial_params(o, b);
+           ++tries)
+        o->trial.alpha[b] *= HOC_OPT_BACKTRACK;
     }
     HOC_TRY_GOTO(hoc_opt_eval_trials(o, elist, ne_list, nthreads), done);
 #pragma omp parallel for schedule(dynamic, 8) num_threads(nthreads)
