@@ -215,6 +215,20 @@ hoc_status hoc_opt_build_blocks(hoc_opt *o, int family) {
       hoc_opt_csr_finish_counts((size_t)max_colors, B->color_start);
       for (size_t b = 0; b < nb; ++b) B->color_block[B->color_start[color[b]]++] = b;
       hoc_opt_csr_restore((size_t)max_colors, B->color_start);
+      B->cpos = hoc_calloc(nb + 1, sizeof *B->cpos);
+      B->cbd = hoc_calloc(nb + 1, sizeof *B->cbd);
+      if (!B->cpos || !B->cbd) status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
+    }
+    for (int c = 0; c < max_colors && status == HOC_OK; ++c) {
+      size_t first = B->color_start[c], nd = 0;
+      for (size_t a = first; a < B->color_start[c + 1]; ++a) {
+        size_t b = B->color_block[a];
+        B->cpos[b] = (uint32_t)(a - first);
+        B->cbd[b] = (uint32_t)nd;
+        nd += B->bd_start[b + 1] - B->bd_start[b];
+      }
+      if (B->color_start[c + 1] - first > B->max_color) B->max_color = B->color_start[c + 1] - first;
+      if (nd > B->max_color_nd) B->max_color_nd = nd;
     }
     if (status == HOC_OK) {
       B->block_color = color;

@@ -16,10 +16,10 @@
  * carries follow), positions and normals evaluated on the CAD. */
 static hoc_status block_f_at(hoc_opt *o, size_t b, int dof, double h, hoc_opt_scratch *s,
                              double *f) {
-  double *st = o->trial.step + o->B->bd_start[b];
+  double *st = hoc_opt_step_of(o, b);
   int nd = (int)(o->B->bd_start[b + 1] - o->B->bd_start[b]);
   for (int c = 0; c < nd; ++c) st[c] = c == dof ? h : 0;
-  o->trial.alpha[b] = 1;
+  o->trial.alpha[hoc_opt_tb(o, b)] = 1;
   size_t n = 0;
   size_t nlist =
       o->B->bn_start[b + 1] - o->B->bn_start[b] + o->B->carry_start[b + 1] - o->B->carry_start[b];

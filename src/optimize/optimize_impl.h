@@ -68,6 +68,10 @@ typedef struct hoc_opt_blockset {
   int n_colors;
   size_t *color_start; /* [n_colors+1] */
   size_t *color_block;
+  /* The block's place among its colour's blocks and the first of its
+   * unknowns among theirs: where its trial values are (hoc_opt_trial) */
+  uint32_t *cpos, *cbd;       /* [n_blocks] */
+  size_t max_color, max_color_nd; /* most blocks and unknowns in a colour */
   /* Blocks woken since their colour last ran, per colour (most sleep: a
    * colour then looks at these instead of all its blocks) */
   int *block_color;        /* [n_blocks] */
@@ -140,15 +144,17 @@ typedef struct hoc_opt_settings {
   int wake_near_only; /* the untangling factor only for blocks with a node in node.near */
 } hoc_opt_settings;
 
-/* Trial state of the blocks of a colour and of their nodes. */
+/* Trial state of the blocks of a colour and of their nodes. A block's
+ * values are at its place in its colour (hoc_opt_blockset.cpos, cbd): the
+ * arrays hold one colour's blocks, not every block of the mesh. */
 typedef struct hoc_opt_trial {
-  double *step;         /* [unknowns] Gauss-Newton direction of each block */
-  double *alpha;        /* [n_blocks] step length */
-  double *f0, *fnew;    /* [n_blocks] local objective before / after */
-  double *slope;        /* [n_blocks] g . step (< 0) */
-  unsigned char *state; /* [n_blocks] 0 idle, 1 trying, 2 accepted */
-  size_t *list;         /* [n_blocks] scratch */
-  size_t *committed;    /* [n_blocks] blocks of the current colour that moved */
+  double *step;         /* [unknowns of a colour] Gauss-Newton direction of each block */
+  double *alpha;        /* [blocks of a colour] step length */
+  double *f0, *fnew;    /* [blocks of a colour] local objective before / after */
+  double *slope;        /* [blocks of a colour] g . step (< 0) */
+  unsigned char *state; /* [blocks of a colour] 0 idle, 1 trying, 2 accepted */
+  size_t *list;         /* [blocks of a colour] scratch */
+  size_t *committed;    /* [blocks of a colour] blocks of the current colour that moved */
   /* The trial state of the nodes being tried (a colour's blocks, a polish
    * move): node k's at index tix[k] of the arrays below, its slots from
    * tsbase[tix[k]] on, in the order of adj.ns_slot (hoc_opt_trial_reserve).
@@ -221,6 +227,14 @@ typedef struct hoc_opt_snapshot {
   size_t tangled; /* SIZE_MAX: none taken */
   double objective;
 } hoc_opt_snapshot;
+
+/* Block b's (of o->B) place in the trial's per-block arrays, and its step. */
+static inline size_t hoc_opt_tb(const hoc_opt *o, size_t b) {
+  return o->B->cpos[b];
+}
+static inline double *hoc_opt_step_of(const hoc_opt *o, size_t b) {
+  return o->trial.step + o->B->cbd[b];
+}
 
 /* Element e may not fold between the samples (its steps run the exact
  * tests): every element of a protected run, the fragile ones of any run. */

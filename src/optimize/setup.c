@@ -19,7 +19,7 @@ void hoc_opt_free(hoc_opt *o) {
     void *q[] = {b->bn_start,    b->bn_node,     b->be_start,    b->be_elem,    b->bd_start,
                  b->node_block,  b->node_off,    b->carry_start, b->carry_node, b->carry_w,
                  b->color_start, b->color_block, b->block_color, b->queue_head, b->queue_next,
-                 b->queued,      b->scan_all};
+                 b->queued,      b->scan_all,    b->cpos,        b->cbd};
     for (size_t i = 0; i < sizeof q / sizeof *q; ++i) free(q[i]);
   }
   void *p[] = {
@@ -106,6 +106,8 @@ hoc_status hoc_opt_setup(hoc_opt *o, hoc_mesh *m, hoc_measure measure, int fix_c
   o->np = o->t->np;
   o->nq = o->t->nq;
   size_t nn = m->n_nodes, ne = m->n_elems, np = (size_t)o->np;
+  /* (node, block and unknown indices of a trial are 32-bit) */
+  HOC_CHECK(nn < UINT32_MAX / 2, HOC_ERR_ARGUMENT, "too many nodes (%zu) for the optimiser", nn);
   HOC_ALLOC(o->adj.ndof, nn);
   HOC_ALLOC(o->adj.ne_local, ne * np + 1);
   HOC_TRY(hoc_opt_csr_alloc(nn, ne * np, &o->adj.ne_start, &o->adj.ne_elem));
@@ -147,10 +149,10 @@ hoc_status hoc_opt_setup(hoc_opt *o, hoc_mesh *m, hoc_measure measure, int fix_c
   HOC_TRY(hoc_par_error_raise(&err));
   o->B = &o->fam[0]; /* family 0 is current by default */
   o->max_nd = o->fam[0].max_nd > o->fam[1].max_nd ? o->fam[0].max_nd : o->fam[1].max_nd;
-  size_t nb = o->fam[0].n_blocks > o->fam[1].n_blocks ? o->fam[0].n_blocks : o->fam[1].n_blocks;
-  size_t nd_total = o->fam[0].bd_start[o->fam[0].n_blocks] > o->fam[1].bd_start[o->fam[1].n_blocks]
-                        ? o->fam[0].bd_start[o->fam[0].n_blocks]
-                        : o->fam[1].bd_start[o->fam[1].n_blocks];
+  /* the trial's per-block arrays hold the largest colour of either family */
+  size_t nb = o->fam[0].max_color > o->fam[1].max_color ? o->fam[0].max_color : o->fam[1].max_color;
+  size_t nd_total = o->fam[0].max_color_nd > o->fam[1].max_color_nd ? o->fam[0].max_color_nd
+                                                                     : o->fam[1].max_color_nd;
   HOC_ALLOC(o->node.dz, 6 * nn);
   HOC_ALLOC(o->node.normal, 3 * m->n_slots + 3);
   HOC_ALLOC(o->el.delta, ne);
@@ -185,7 +187,6 @@ hoc_status hoc_opt_setup(hoc_opt *o, hoc_mesh *m, hoc_measure measure, int fix_c
   HOC_ALLOC(o->trial.state, nb + 1);
   HOC_ALLOC(o->trial.list, nb + 1);
   HOC_ALLOC(o->trial.committed, nb + 1);
-  HOC_CHECK(nn < UINT32_MAX, HOC_ERR_ARGUMENT, "too many nodes (%zu) for the optimiser", nn);
   HOC_ALLOC(o->trial.tix, nn + 1);
   /* local length: the longest edge of the linear sub-triangles around */
   for (size_t e = 0; e < ne; ++e) {

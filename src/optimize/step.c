@@ -236,9 +236,10 @@ hoc_status hoc_opt_do_color(hoc_opt *o, int color, hoc_opt_scratch *scr, int nth
     int nd = (int)(o->B->bd_start[b + 1] - o->B->bd_start[b]);
     double f;
     hoc_opt_block_model(o, b, s, &f, s->g, s->H);
-    o->trial.f0[b] = f;
-    o->trial.state[b] = 0;
-    double *st = o->trial.step + o->B->bd_start[b];
+    size_t tb = hoc_opt_tb(o, b);
+    o->trial.f0[tb] = f;
+    o->trial.state[tb] = 0;
+    double *st = hoc_opt_step_of(o, b);
     if (!damped_solve(nd, s->H, s->g, s->L, st)) continue;
     double slope = 0;
     for (int c = 0; c < nd; ++c) slope += s->g[c] * st[c];
@@ -255,13 +256,13 @@ hoc_status hoc_opt_do_color(hoc_opt *o, int color, hoc_opt_scratch *scr, int nth
     }
     if (len_max > HOC_OPT_STEP_CAP) alpha = HOC_OPT_STEP_CAP / len_max;
     if (!(slope < 0) || !isfinite(slope) || !(len_max * alpha > HOC_OPT_STEP_MIN)) continue;
-    o->trial.slope[b] = slope;
-    o->trial.alpha[b] = alpha;
-    o->trial.state[b] = 1;
+    o->trial.slope[tb] = slope;
+    o->trial.alpha[tb] = alpha;
+    o->trial.state[tb] = 1;
   }
   size_t nt = 0;
   for (size_t a = 0; a < n; ++a)
-    if (o->trial.state[list[a]] == 1) list[nt++] = list[a];
+    if (o->trial.state[hoc_opt_tb(o, list[a])] == 1) list[nt++] = list[a];
   size_t n_eval = 0;
   for (size_t a = 0; a < nt; ++a) {
     size_t b = list[a];
@@ -285,35 +286,35 @@ hoc_status hoc_opt_do_color(hoc_opt *o, int color, hoc_opt_scratch *scr, int nth
       size_t b = list[a];
       for (int tries = 0; tries < HOC_OPT_RANGE_HALVINGS && !hoc_opt_set_trial_params(o, b);
            ++tries)
-        o->trial.alpha[b] *= HOC_OPT_BACKTRACK;
+        o->trial.alpha[hoc_opt_tb(o, b)] *= HOC_OPT_BACKTRACK;
     }
     HOC_TRY_GOTO(hoc_opt_eval_trials(o, elist, ne_list, nthreads), done);
 #pragma omp parallel for schedule(dynamic, 8) num_threads(nthreads)
     for (size_t a = 0; a < nt; ++a) {
-      size_t b = list[a];
+      size_t b = list[a], tb = hoc_opt_tb(o, b);
       hoc_opt_scratch *s = &scr[omp_get_thread_num()];
       double f;
       int ok = block_trial(
-          o, b, s, o->trial.f0[b] + HOC_OPT_ARMIJO * o->trial.alpha[b] * o->trial.slope[b], &f);
+          o, b, s, o->trial.f0[tb] + HOC_OPT_ARMIJO * o->trial.alpha[tb] * o->trial.slope[tb], &f);
       if (ok) {
         for (size_t c = o->B->bn_start[b]; c < o->B->bn_start[b + 1]; ++c)
           hoc_opt_commit(o, o->B->bn_node[c]);
         for (size_t j = o->B->carry_start[b]; j < o->B->carry_start[b + 1]; ++j)
           hoc_opt_commit(o, o->B->carry_node[j]);
-        o->trial.fnew[b] = f;
-        o->trial.state[b] = 2;
+        o->trial.fnew[tb] = f;
+        o->trial.state[tb] = 2;
       } else {
-        o->trial.alpha[b] *= HOC_OPT_BACKTRACK;
+        o->trial.alpha[tb] *= HOC_OPT_BACKTRACK;
       }
     }
     size_t keep = 0;
     for (size_t a = 0; a < nt; ++a) {
-      size_t b = list[a];
-      if (o->trial.state[b] != 2) {
+      size_t b = list[a], tb = hoc_opt_tb(o, b);
+      if (o->trial.state[tb] != 2) {
         list[keep++] = b;
         continue;
       }
-      o->trial.state[b] = 0;
+      o->trial.state[tb] = 0;
       o->trial.committed[n_committed++] = b;
       size_t nodes = o->B->bn_start[b + 1] - o->B->bn_start[b];
       *moved += nodes;
@@ -321,7 +322,7 @@ hoc_status hoc_opt_do_color(hoc_opt *o, int color, hoc_opt_scratch *scr, int nth
        * spread waves of smaller ones through the whole mesh) */
       double factor = o->cfg.wake_factor;
       if (o->cfg.wake_near_only && !near_fold(o, b)) factor = HOC_OPT_WAKE_SMOOTHING;
-      if (o->trial.f0[b] - o->trial.fnew[b] < factor * o->cfg.min_gain * (double)nodes &&
+      if (o->trial.f0[tb] - o->trial.fnew[tb] < factor * o->cfg.min_gain * (double)nodes &&
           !near_tangled(o, b))
         continue;
       /* wake every node of the elements it touches (itself included) */
@@ -333,7 +334,7 @@ hoc_status hoc_opt_do_color(hoc_opt *o, int color, hoc_opt_scratch *scr, int nth
     }
     nt = keep;
   }
-  for (size_t a = 0; a < nt; ++a) o->trial.state[list[a]] = 0; /* gave up: asleep */
+  for (size_t a = 0; a < nt; ++a) o->trial.state[hoc_opt_tb(o, list[a])] = 0; /* gave up: asleep */
     /* validity may have been gained where blocks moved */
 #pragma omp parallel for schedule(dynamic, 8) num_threads(nthreads)
   for (size_t a = 0; a < n_committed; ++a) {

@@ -110,8 +110,8 @@ static int param_ok(double cur, double v, double lo, double hi) {
  * and the nodes it carries. Returns 0 if one leaves a non-closed range. */
 int hoc_opt_set_trial_params(hoc_opt *o, size_t b) {
   const hoc_mesh *m = o->m;
-  const double *st = o->trial.step + o->B->bd_start[b];
-  double al = o->trial.alpha[b];
+  const double *st = hoc_opt_step_of(o, b);
+  double al = o->trial.alpha[hoc_opt_tb(o, b)];
   int inside = 1;
   for (size_t a = o->B->bn_start[b]; a < o->B->bn_start[b + 1]; ++a) {
     size_t k = o->B->bn_node[a];
