@@ -14,11 +14,21 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* The items of a list, its spare capacity returned (the lists grow by
- * doubling: up to half of a large mesh's block lists would be spare). */
-static void *fit(void *v, size_t n, size_t size) {
-  void *w = hoc_realloc(v, n ? n : 1, size);
-  return w ? w : v; /* (a failed shrink keeps the larger block) */
+/* The items of a list as 32-bit indices (the list is freed, and NULL
+ * returned when out of memory). */
+static uint32_t *narrow(hoc_growlist *g) {
+  uint32_t *w = hoc_realloc(NULL, g->n ? g->n : 1, sizeof *w);
+  for (size_t i = 0; w && i < g->n; ++i) w[i] = (uint32_t)g->v[i];
+  free(g->v);
+  g->v = NULL;
+  return w;
+}
+
+/* w[0..n) reallocated to its size (the weights grow with their list by
+ * doubling). */
+static double *fit(double *w, size_t n) {
+  double *v = hoc_realloc(w, n ? n : 1, sizeof *v);
+  return v ? v : w; /* (a failed shrink keeps the larger block) */
 }
 
 /* Blocks of family 0: vertices, edges, element interiors; of family 1:
@@ -30,7 +40,7 @@ hoc_status hoc_opt_build_blocks(hoc_opt *o, int family) {
   int p = m->order;
   HOC_ALLOC(B->node_block, nn);
   HOC_ALLOC(B->node_off, nn);
-  for (size_t i = 0; i < nn; ++i) B->node_block[i] = SIZE_MAX;
+  for (size_t i = 0; i < nn; ++i) B->node_block[i] = HOC_OPT_NO_BLOCK;
   hoc_growlist start = {0}, nodes = {0};
   hoc_status status = HOC_OK;
   /* vertex blocks first, then edge blocks, then interior blocks */
@@ -41,8 +51,8 @@ hoc_status hoc_opt_build_blocks(hoc_opt *o, int family) {
         const size_t *cn = m->conn + e * np;
         for (size_t k = 0; k < np; ++k) {
           size_t i = cn[k];
-          if (!o->adj.ndof[i] || B->node_block[i] != SIZE_MAX) continue;
-          B->node_block[i] = start.n;
+          if (!o->adj.ndof[i] || B->node_block[i] != HOC_OPT_NO_BLOCK) continue;
+          B->node_block[i] = (uint32_t)start.n;
           HOC_TRY_GOTO(hoc_grow_push(&start, nodes.n), done);
           HOC_TRY_GOTO(hoc_grow_push(&nodes, i), done);
         }
@@ -52,8 +62,8 @@ hoc_status hoc_opt_build_blocks(hoc_opt *o, int family) {
       if (kind == 0) {
         for (int k = 0; k < 3; ++k) {
           size_t i = cn[k];
-          if (!o->adj.ndof[i] || B->node_block[i] != SIZE_MAX) continue;
-          B->node_block[i] = start.n;
+          if (!o->adj.ndof[i] || B->node_block[i] != HOC_OPT_NO_BLOCK) continue;
+          B->node_block[i] = (uint32_t)start.n;
           HOC_TRY_GOTO(hoc_grow_push(&start, nodes.n), done);
           HOC_TRY_GOTO(hoc_grow_push(&nodes, i), done);
         }
@@ -63,9 +73,9 @@ hoc_status hoc_opt_build_blocks(hoc_opt *o, int family) {
           size_t first = nodes.n;
           for (int j = 0; j < p - 1; ++j) {
             size_t i = cn[3 + k * (p - 1) + j];
-            if (!o->adj.ndof[i] || B->node_block[i] != SIZE_MAX) continue;
+            if (!o->adj.ndof[i] || B->node_block[i] != HOC_OPT_NO_BLOCK) continue;
             if (nodes.n == first) HOC_TRY_GOTO(hoc_grow_push(&start, nodes.n), done);
-            B->node_block[i] = start.n - 1;
+            B->node_block[i] = (uint32_t)(start.n - 1);
             HOC_TRY_GOTO(hoc_grow_push(&nodes, i), done);
           }
         }
@@ -73,9 +83,9 @@ hoc_status hoc_opt_build_blocks(hoc_opt *o, int family) {
         size_t first = nodes.n;
         for (size_t k = 3 * (size_t)p; k < np; ++k) {
           size_t i = cn[k];
-          if (!o->adj.ndof[i] || B->node_block[i] != SIZE_MAX) continue;
+          if (!o->adj.ndof[i] || B->node_block[i] != HOC_OPT_NO_BLOCK) continue;
           if (nodes.n == first) HOC_TRY_GOTO(hoc_grow_push(&start, nodes.n), done);
-          B->node_block[i] = start.n - 1;
+          B->node_block[i] = (uint32_t)(start.n - 1);
           HOC_TRY_GOTO(hoc_grow_push(&nodes, i), done);
         }
       }
@@ -83,8 +93,12 @@ hoc_status hoc_opt_build_blocks(hoc_opt *o, int family) {
   size_t nb = start.n;
   B->n_blocks = nb;
   HOC_TRY_GOTO(hoc_grow_push(&start, nodes.n), done);
-  B->bn_start = fit(start.v, start.n, sizeof *start.v);
-  B->bn_node = fit(nodes.v, nodes.n, sizeof *nodes.v);
+  B->bn_start = narrow(&start);
+  B->bn_node = narrow(&nodes);
+  if (!B->bn_start || !B->bn_node) {
+    status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
+    goto done;
+  }
   start.v = nodes.v = NULL;
   /* unknowns */
   B->bd_start = hoc_calloc(nb + 1, sizeof *B->bd_start);
@@ -117,8 +131,10 @@ hoc_status hoc_opt_build_blocks(hoc_opt *o, int family) {
       }
     }
     if (status == HOC_OK) status = hoc_grow_push(&fs, fe.n);
-    B->be_start = status == HOC_OK ? fit(fs.v, fs.n, sizeof *fs.v) : fs.v;
-    B->be_elem = status == HOC_OK ? fit(fe.v, fe.n, sizeof *fe.v) : fe.v;
+    B->be_start = narrow(&fs);
+    B->be_elem = narrow(&fe);
+    if (status == HOC_OK && (!B->be_start || !B->be_elem))
+      status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
     if (status != HOC_OK) goto done;
   }
   /* carried nodes of face-interior vertex blocks */
@@ -166,9 +182,11 @@ hoc_status hoc_opt_build_blocks(hoc_opt *o, int family) {
     }
     free(last);
     if (status == HOC_OK) status = hoc_grow_push(&cs, cn.n);
-    B->carry_start = status == HOC_OK ? fit(cs.v, cs.n, sizeof *cs.v) : cs.v;
-    B->carry_node = status == HOC_OK ? fit(cn.v, cn.n, sizeof *cn.v) : cn.v;
-    B->carry_w = status == HOC_OK && w ? fit(w, cn.n, sizeof *w) : w;
+    B->carry_w = status == HOC_OK && w ? fit(w, cn.n) : w;
+    B->carry_start = narrow(&cs);
+    B->carry_node = narrow(&cn);
+    if (status == HOC_OK && (!B->carry_start || !B->carry_node))
+      status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
     if (status != HOC_OK) goto done;
   }
   /* colours: blocks touching a common element differ; every element's
@@ -188,8 +206,8 @@ hoc_status hoc_opt_build_blocks(hoc_opt *o, int family) {
       for (size_t a = B->be_start[b]; a < B->be_start[b + 1]; ++a) {
         const size_t *cn = m->conn + B->be_elem[a] * np;
         for (size_t k = 0; k < np; ++k) {
-          size_t b2 = B->node_block[cn[k]];
-          if (b2 != SIZE_MAX && color[b2] >= 0) stamp[color[b2]] = b + 1;
+          uint32_t b2 = B->node_block[cn[k]];
+          if (b2 != HOC_OPT_NO_BLOCK && color[b2] >= 0) stamp[color[b2]] = b + 1;
         }
       }
       int c = 0;
@@ -281,8 +299,9 @@ void hoc_opt_wake_node(hoc_opt *o, size_t k) {
   o->node.active[k] = 1;
   for (int f = 0; f < 2; ++f) {
     hoc_opt_blockset *B = &o->fam[f];
+    if (B->node_block[k] == HOC_OPT_NO_BLOCK) continue;
     size_t b = B->node_block[k];
-    if (b == SIZE_MAX || B->queued[b]) continue;
+    if (B->queued[b]) continue;
     B->queued[b] = 1;
     int c = B->block_color[b];
     B->queue_next[b] = B->queue_head[c];

@@ -53,16 +53,22 @@
 #include <stddef.h>
 #include <stdint.h>
 
-/* A family of blocks: each block a set of free nodes updated together. */
+/* hoc_opt_blockset.node_block of a node in no block. */
+#define HOC_OPT_NO_BLOCK UINT32_MAX
+
+/* A family of blocks: each block a set of free nodes updated together.
+ * Node, element and list indices are 32-bit (hoc_opt_setup checks the
+ * mesh's sizes): the lists of single-node blocks hold several entries per
+ * node of the mesh, most of the optimiser's memory at high orders. */
 typedef struct hoc_opt_blockset {
   size_t n_blocks;
-  size_t *bn_start, *bn_node; /* block -> its nodes */
-  size_t *be_start, *be_elem; /* block -> the elements it touches */
-  size_t *bd_start;           /* block -> first of its unknowns in step[] */
-  size_t *node_block;         /* [n_nodes] block of a free node (SIZE_MAX if fixed) */
-  int *node_off;              /* [n_nodes] offset of the node's unknowns in its block */
-  size_t *carry_start;        /* [n_blocks+1] nodes a vertex block carries ... */
-  size_t *carry_node;
+  uint32_t *bn_start, *bn_node; /* block -> its nodes */
+  uint32_t *be_start, *be_elem; /* block -> the elements it touches */
+  size_t *bd_start;             /* block -> first of its unknowns */
+  uint32_t *node_block;         /* [n_nodes] block of a free node (HOC_OPT_NO_BLOCK if fixed) */
+  int *node_off;                /* [n_nodes] offset of the node's unknowns in its block */
+  uint32_t *carry_start;        /* [n_blocks+1] nodes a vertex block carries ... */
+  uint32_t *carry_node;
   double *carry_w; /* ... and their weights */
   int max_nd;      /* most unknowns in a block */
   int n_colors;

@@ -106,8 +106,10 @@ hoc_status hoc_opt_setup(hoc_opt *o, hoc_mesh *m, hoc_measure measure, int fix_c
   o->np = o->t->np;
   o->nq = o->t->nq;
   size_t nn = m->n_nodes, ne = m->n_elems, np = (size_t)o->np;
-  /* (node, block and unknown indices of a trial are 32-bit) */
-  HOC_CHECK(nn < UINT32_MAX / 2, HOC_ERR_ARGUMENT, "too many nodes (%zu) for the optimiser", nn);
+  /* (node, element and list indices of the blocks and of a trial are
+   * 32-bit: a block list has at most 3 entries per node of an element) */
+  HOC_CHECK(nn < UINT32_MAX / 2 && ne * np < UINT32_MAX / 4, HOC_ERR_ARGUMENT,
+            "mesh too large for the optimiser (%zu nodes, %zu elements)", nn, ne);
   HOC_ALLOC(o->adj.ndof, nn);
   HOC_ALLOC(o->adj.ne_local, ne * np + 1);
   HOC_TRY(hoc_opt_csr_alloc(nn, ne * np, &o->adj.ne_start, &o->adj.ne_elem));
