@@ -90,13 +90,13 @@ typedef struct hoc_opt_blockset {
 /* Adjacency and unknowns: fixed once set up. */
 typedef struct hoc_opt_adjacency {
   unsigned char *ndof; /* [n_nodes] unknowns of the node: 0, 1 (t) or 2 (u, v) */
-  size_t *ne_start;    /* [n_nodes+1] node -> elements */
-  size_t *ne_elem;     /* element */
-  int *ne_local;       /* local index of the node in it */
-  size_t *ns_start;    /* [n_nodes+1] node -> slots */
-  size_t *ns_slot;
-  size_t *nl_start; /* [n_nodes+1] node -> lines */
-  size_t *nl_line;
+  uint32_t *ne_start; /* [n_nodes+1] node -> elements (32-bit, as the block lists) */
+  uint32_t *ne_elem;  /* element */
+  int *ne_local;      /* local index of the node in it */
+  uint32_t *ns_start; /* [n_nodes+1] node -> slots */
+  uint32_t *ns_slot;
+  uint32_t *nl_start; /* [n_nodes+1] node -> lines */
+  uint32_t *nl_line;
   double *hsize;              /* [n_nodes] local length: bound on one step's displacement */
   unsigned char *on_boundary; /* [n_elems] has a node on a CAD curve or vertex: kept unfolded in
                                  (u,v) so no node leaves the trimmed face (inside, 3D validity

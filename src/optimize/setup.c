@@ -95,6 +95,33 @@ static hoc_status restrict_free(hoc_opt *o, const unsigned char *flagged, int ri
   return HOC_OK;
 }
 
+/* A compressed row of n rows and `total` items (start[n+1], items[total])
+ * as 32-bit indices into *start32 and *items32; both given arrays freed. */
+static hoc_status narrow_csr(size_t n, size_t total, size_t **start, size_t **items,
+                             uint32_t **start32, uint32_t **items32) {
+  *start32 = hoc_realloc(NULL, n + 1, sizeof **start32);
+  *items32 = hoc_realloc(NULL, total + 1, sizeof **items32);
+  for (size_t i = 0; *start32 && i <= n; ++i) (*start32)[i] = (uint32_t)(*start)[i];
+  for (size_t i = 0; *items32 && i < total; ++i) (*items32)[i] = (uint32_t)(*items)[i];
+  free(*start);
+  free(*items);
+  *start = *items = NULL;
+  HOC_CHECK(*start32 && *items32, HOC_ERR_MEMORY, "out of memory for the optimiser's adjacency");
+  return HOC_OK;
+}
+
+/* hoc_opt_csr_alloc into arrays of the caller's (nothing left allocated
+ * on failure). */
+static hoc_status csr_alloc_local(size_t n, size_t total, size_t **start, size_t **items) {
+  hoc_status status = hoc_opt_csr_alloc(n, total, start, items);
+  if (status != HOC_OK) {
+    free(*start);
+    free(*items);
+    *start = *items = NULL;
+  }
+  return status;
+}
+
 hoc_status hoc_opt_setup(hoc_opt *o, hoc_mesh *m, hoc_measure measure, int fix_curves,
                         const unsigned char *free_elements, int free_rings) {
   memset(o, 0, sizeof *o);
@@ -108,34 +135,40 @@ hoc_status hoc_opt_setup(hoc_opt *o, hoc_mesh *m, hoc_measure measure, int fix_c
   size_t nn = m->n_nodes, ne = m->n_elems, np = (size_t)o->np;
   /* (node, element and list indices of the blocks and of a trial are
    * 32-bit: a block list has at most 3 entries per node of an element) */
-  HOC_CHECK(nn < UINT32_MAX / 2 && ne * np < UINT32_MAX / 4, HOC_ERR_ARGUMENT,
+  HOC_CHECK(nn < UINT32_MAX / 2 && ne * np < UINT32_MAX / 4 && m->n_slots < UINT32_MAX / 4 &&
+                m->n_lines * ((size_t)m->order + 1) < UINT32_MAX / 4,
+            HOC_ERR_ARGUMENT,
             "mesh too large for the optimiser (%zu nodes, %zu elements)", nn, ne);
   HOC_ALLOC(o->adj.ndof, nn);
   HOC_ALLOC(o->adj.ne_local, ne * np + 1);
-  HOC_TRY(hoc_opt_csr_alloc(nn, ne * np, &o->adj.ne_start, &o->adj.ne_elem));
+  size_t *start = NULL, *items = NULL;
+  HOC_TRY(csr_alloc_local(nn, ne * np, &start, &items));
   for (size_t e = 0; e < ne; ++e)
-    for (size_t k = 0; k < np; ++k) o->adj.ne_start[m->conn[e * np + k] + 1]++;
-  hoc_opt_csr_finish_counts(nn, o->adj.ne_start);
+    for (size_t k = 0; k < np; ++k) start[m->conn[e * np + k] + 1]++;
+  hoc_opt_csr_finish_counts(nn, start);
   for (size_t e = 0; e < ne; ++e)
     for (size_t k = 0; k < np; ++k) {
-      size_t i = m->conn[e * np + k], pos = o->adj.ne_start[i]++;
-      o->adj.ne_elem[pos] = e;
+      size_t i = m->conn[e * np + k], pos = start[i]++;
+      items[pos] = e;
       o->adj.ne_local[pos] = (int)k;
     }
-  hoc_opt_csr_restore(nn, o->adj.ne_start);
-  HOC_TRY(hoc_opt_csr_alloc(nn, m->n_slots, &o->adj.ns_start, &o->adj.ns_slot));
-  for (size_t s = 0; s < m->n_slots; ++s) o->adj.ns_start[m->slot_node[s] + 1]++;
-  hoc_opt_csr_finish_counts(nn, o->adj.ns_start);
-  for (size_t s = 0; s < m->n_slots; ++s) o->adj.ns_slot[o->adj.ns_start[m->slot_node[s]]++] = s;
-  hoc_opt_csr_restore(nn, o->adj.ns_start);
+  hoc_opt_csr_restore(nn, start);
+  HOC_TRY(narrow_csr(nn, ne * np, &start, &items, &o->adj.ne_start, &o->adj.ne_elem));
+  HOC_TRY(csr_alloc_local(nn, m->n_slots, &start, &items));
+  for (size_t s = 0; s < m->n_slots; ++s) start[m->slot_node[s] + 1]++;
+  hoc_opt_csr_finish_counts(nn, start);
+  for (size_t s = 0; s < m->n_slots; ++s) items[start[m->slot_node[s]]++] = s;
+  hoc_opt_csr_restore(nn, start);
+  HOC_TRY(narrow_csr(nn, m->n_slots, &start, &items, &o->adj.ns_start, &o->adj.ns_slot));
   size_t lp = (size_t)m->order + 1;
-  HOC_TRY(hoc_opt_csr_alloc(nn, m->n_lines * lp, &o->adj.nl_start, &o->adj.nl_line));
+  HOC_TRY(csr_alloc_local(nn, m->n_lines * lp, &start, &items));
   for (size_t l = 0; l < m->n_lines; ++l)
-    for (size_t k = 0; k < lp; ++k) o->adj.nl_start[m->line_conn[l * lp + k] + 1]++;
-  hoc_opt_csr_finish_counts(nn, o->adj.nl_start);
+    for (size_t k = 0; k < lp; ++k) start[m->line_conn[l * lp + k] + 1]++;
+  hoc_opt_csr_finish_counts(nn, start);
   for (size_t l = 0; l < m->n_lines; ++l)
-    for (size_t k = 0; k < lp; ++k) o->adj.nl_line[o->adj.nl_start[m->line_conn[l * lp + k]]++] = l;
-  hoc_opt_csr_restore(nn, o->adj.nl_start);
+    for (size_t k = 0; k < lp; ++k) items[start[m->line_conn[l * lp + k]]++] = l;
+  hoc_opt_csr_restore(nn, start);
+  HOC_TRY(narrow_csr(nn, m->n_lines * lp, &start, &items, &o->adj.nl_start, &o->adj.nl_line));
   for (size_t i = 0; i < nn; ++i) {
     if (o->adj.ne_start[i + 1] == o->adj.ne_start[i]) continue; /* used by no element */
     if (m->dim[i] == HOC_ON_FACE) o->adj.ndof[i] = 2;
