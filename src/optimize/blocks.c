@@ -24,11 +24,17 @@ static uint32_t *narrow(hoc_growlist *g) {
   return w;
 }
 
-/* w[0..n) reallocated to its size (the weights grow with their list by
- * doubling). */
-static double *fit(double *w, size_t n) {
-  double *v = hoc_realloc(w, n ? n : 1, sizeof *v);
-  return v ? v : w; /* (a failed shrink keeps the larger block) */
+/* The weight of a carried node from its code kk * np + i: the barycentric
+ * coordinate for corner kk of local node i. */
+static double carry_weight(const hoc_quality_tables *t, unsigned code) {
+  size_t i = code % (unsigned)t->np;
+  unsigned kk = code / (unsigned)t->np;
+  double r = t->rs[2 * i], s = t->rs[2 * i + 1];
+  return kk == 0 ? 1 - r - s : kk == 1 ? r : s;
+}
+
+double hoc_opt_carry_w(const hoc_opt *o, size_t j) {
+  return carry_weight(o->t, o->B->carry_code[j]);
 }
 
 /* Blocks of family 0: vertices, edges, element interiors; of family 1:
@@ -140,8 +146,8 @@ hoc_status hoc_opt_build_blocks(hoc_opt *o, int family) {
   /* carried nodes of face-interior vertex blocks */
   {
     hoc_growlist cs = {0}, cn = {0};
-    double *w = NULL;
-    size_t wcap = 0;
+    uint16_t *code = NULL; /* each carried node's weight (hoc_opt_carry_w) */
+    size_t ccap = 0;
     size_t *last = hoc_realloc(NULL, nn + 1, sizeof *last); /* block that last took the node */
     if (!last) status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
     for (size_t i = 0; last && i <= nn; ++i)
@@ -161,28 +167,31 @@ hoc_status hoc_opt_build_blocks(hoc_opt *o, int family) {
           size_t node = m->conn[e * np + i];
           if (o->adj.ndof[node] != 2 || m->entity[node] != m->entity[k] || last[node] == b)
             continue;
-          double r = o->t->rs[2 * i], s = o->t->rs[2 * i + 1];
-          double lam = kk == 0 ? 1 - r - s : kk == 1 ? r : s;
-          if (!(lam > HOC_OPT_CARRY_MIN_WEIGHT)) continue;
+          uint16_t c = (uint16_t)((size_t)kk * np + i);
+          if (!(carry_weight(o->t, c) > HOC_OPT_CARRY_MIN_WEIGHT)) continue;
           last[node] = b;
           status = hoc_grow_push(&cn, node);
           if (status != HOC_OK) break;
-          if (cn.n > wcap) {
-            wcap = cn.cap;
-            double *w2 = hoc_realloc(w, wcap, sizeof *w2);
-            if (!w2) {
+          if (cn.n > ccap) {
+            ccap = cn.cap;
+            uint16_t *c2 = hoc_realloc(code, ccap, sizeof *c2);
+            if (!c2) {
               status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
               break;
             }
-            w = w2;
+            code = c2;
           }
-          w[cn.n - 1] = lam;
+          code[cn.n - 1] = c;
         }
       }
     }
     free(last);
     if (status == HOC_OK) status = hoc_grow_push(&cs, cn.n);
-    B->carry_w = status == HOC_OK && w ? fit(w, cn.n) : w;
+    if (status == HOC_OK && code) {
+      uint16_t *c2 = hoc_realloc(code, cn.n ? cn.n : 1, sizeof *c2);
+      if (c2) code = c2; /* (a failed shrink keeps the larger block) */
+    }
+    B->carry_code = code;
     B->carry_start = narrow(&cs);
     B->carry_node = narrow(&cn);
     if (status == HOC_OK && (!B->carry_start || !B->carry_node))
@@ -273,7 +282,7 @@ done:
 
 double hoc_opt_carry_weight(const hoc_opt *o, size_t b, size_t node) {
   for (size_t j = o->B->carry_start[b]; j < o->B->carry_start[b + 1]; ++j)
-    if (o->B->carry_node[j] == node) return o->B->carry_w[j];
+    if (o->B->carry_node[j] == node) return hoc_opt_carry_w(o, j);
   return 0;
 }
 

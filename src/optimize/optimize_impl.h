@@ -69,7 +69,8 @@ typedef struct hoc_opt_blockset {
   int *node_off;                /* [n_nodes] offset of the node's unknowns in its block */
   uint32_t *carry_start;        /* [n_blocks+1] nodes a vertex block carries ... */
   uint32_t *carry_node;
-  double *carry_w; /* ... and their weights */
+  uint16_t *carry_code; /* ... and their weights, as corner * np + local node of the element
+                           they were found in (hoc_opt_carry_w) */
   int max_nd;      /* most unknowns in a block */
   int n_colors;
   size_t *color_start; /* [n_colors+1] */
@@ -279,6 +280,8 @@ hoc_status hoc_grow_push(hoc_growlist *g, size_t x);
 hoc_status hoc_opt_build_blocks(hoc_opt *o, int family);
 /* Weight with which block b (of o->B) carries node (0: not carried). */
 double hoc_opt_carry_weight(const hoc_opt *o, size_t b, size_t node);
+/* Weight of the carried node carry_node[j] of o->B. */
+double hoc_opt_carry_w(const hoc_opt *o, size_t j);
 /* Flags block b's nodes and carried nodes as moving (v = 1) or not. */
 void hoc_opt_set_moving(hoc_opt *o, size_t b, unsigned char v);
 /* Node k awake, its blocks of both families queued on their colours. */

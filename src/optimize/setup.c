@@ -17,7 +17,7 @@ void hoc_opt_free(hoc_opt *o) {
   for (int f = 0; f < 2; ++f) {
     hoc_opt_blockset *b = &o->fam[f];
     void *q[] = {b->bn_start,    b->bn_node,     b->be_start,    b->be_elem,    b->bd_start,
-                 b->node_block,  b->node_off,    b->carry_start, b->carry_node, b->carry_w,
+                 b->node_block,  b->node_off,    b->carry_start, b->carry_node, b->carry_code,
                  b->color_start, b->color_block, b->block_color, b->queue_head, b->queue_next,
                  b->queued,      b->scan_all,    b->cpos,        b->cbd};
     for (size_t i = 0; i < sizeof q / sizeof *q; ++i) free(q[i]);

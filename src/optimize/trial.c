@@ -138,7 +138,7 @@ int hoc_opt_set_trial_params(hoc_opt *o, size_t b) {
     const hoc_cad_face *f = &o->model->faces[m->entity[c]];
     double *tp = hoc_opt_tpar(o, c);
     for (int d = 0; d < 2; ++d) {
-      double v = m->param[2 * c + d] + al * o->B->carry_w[j] * st[d];
+      double v = m->param[2 * c + d] + al * hoc_opt_carry_w(o, j) * st[d];
       tp[d] = v;
       if (!(f->period[d] > 0) && !param_ok(m->param[2 * c + d], v, f->lo[d], f->hi[d])) inside = 0;
     }
