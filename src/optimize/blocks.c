@@ -118,7 +118,7 @@ hoc_status hoc_opt_build_blocks(hoc_opt *o, int family) {
       B->node_off[B->bn_node[a]] = off;
       off += o->adj.ndof[B->bn_node[a]];
     }
-    B->bd_start[b + 1] = B->bd_start[b] + (size_t)off;
+    B->bd_start[b + 1] = B->bd_start[b] + (uint32_t)off;
     if (off > B->max_nd) B->max_nd = off;
   }
   /* footprints: the elements of the block's nodes */
@@ -267,7 +267,7 @@ hoc_status hoc_opt_build_blocks(hoc_opt *o, int family) {
       if (!B->queue_head || !B->queue_next || !B->queued || !B->scan_all)
         status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
       for (int c = 0; c < max_colors && status == HOC_OK; ++c) {
-        B->queue_head[c] = SIZE_MAX;
+        B->queue_head[c] = HOC_OPT_NO_BLOCK;
         B->scan_all[c] = 1;
       }
     }
@@ -314,7 +314,7 @@ void hoc_opt_wake_node(hoc_opt *o, size_t k) {
     B->queued[b] = 1;
     int c = B->block_color[b];
     B->queue_next[b] = B->queue_head[c];
-    B->queue_head[c] = b;
+    B->queue_head[c] = (uint32_t)b;
   }
 }
 
@@ -336,12 +336,12 @@ void hoc_opt_mark_near(hoc_opt *o) {
 size_t hoc_opt_select_active(hoc_opt *o, int color) {
   hoc_opt_blockset *B = o->B;
   size_t n = 0;
-  for (size_t b = B->queue_head[color], next; b != SIZE_MAX; b = next) {
+  for (size_t b = B->queue_head[color], next; b != HOC_OPT_NO_BLOCK; b = next) {
     next = B->queue_next[b];
     B->queued[b] = 0;
     if (!B->scan_all[color] && block_active(o, b)) o->trial.list[n++] = b;
   }
-  B->queue_head[color] = SIZE_MAX;
+  B->queue_head[color] = HOC_OPT_NO_BLOCK;
   if (B->scan_all[color]) {
     B->scan_all[color] = 0;
     for (size_t a = B->color_start[color]; a < B->color_start[color + 1]; ++a)

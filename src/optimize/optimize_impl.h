@@ -53,7 +53,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
-/* hoc_opt_blockset.node_block of a node in no block. */
+/* hoc_opt_blockset.node_block of a node in no block; the end of a queue. */
 #define HOC_OPT_NO_BLOCK UINT32_MAX
 
 /* A family of blocks: each block a set of free nodes updated together.
@@ -64,7 +64,7 @@ typedef struct hoc_opt_blockset {
   size_t n_blocks;
   uint32_t *bn_start, *bn_node; /* block -> its nodes */
   uint32_t *be_start, *be_elem; /* block -> the elements it touches */
-  size_t *bd_start;             /* block -> first of its unknowns */
+  uint32_t *bd_start;           /* block -> first of its unknowns */
   uint32_t *node_block;         /* [n_nodes] block of a free node (HOC_OPT_NO_BLOCK if fixed) */
   int *node_off;                /* [n_nodes] offset of the node's unknowns in its block */
   uint32_t *carry_start;        /* [n_blocks+1] nodes a vertex block carries ... */
@@ -82,8 +82,8 @@ typedef struct hoc_opt_blockset {
   /* Blocks woken since their colour last ran, per colour (most sleep: a
    * colour then looks at these instead of all its blocks) */
   int *block_color;        /* [n_blocks] */
-  size_t *queue_head;      /* [n_colors] first queued block, SIZE_MAX if none */
-  size_t *queue_next;      /* [n_blocks] next in its colour's queue */
+  uint32_t *queue_head;    /* [n_colors] first queued block, HOC_OPT_NO_BLOCK if none */
+  uint32_t *queue_next;    /* [n_blocks] next in its colour's queue */
   unsigned char *queued;   /* [n_blocks] */
   unsigned char *scan_all; /* [n_colors] every block may be active: look at all */
 } hoc_opt_blockset;

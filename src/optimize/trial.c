@@ -53,7 +53,7 @@ hoc_status hoc_opt_trial_reserve(hoc_opt *o, const size_t *nodes, size_t n) {
   for (size_t a = 0; a < n; ++a)
     slots += o->adj.ns_start[nodes[a] + 1] - o->adj.ns_start[nodes[a]];
   if (n > t->cap) {
-    size_t cap = n > 2 * t->cap ? n : 2 * t->cap; /* (grows geometrically) */
+    size_t cap = n; /* (exactly: every block is awake in the first sweep, whose colours set it) */
     HOC_CHECK(grow((void **)&t->tpar, 2 * cap, sizeof *t->tpar) &&
                   grow((void **)&t->txyz, 3 * cap, sizeof *t->txyz) &&
                   grow((void **)&t->tdz, 6 * cap, sizeof *t->tdz) &&
@@ -62,7 +62,7 @@ hoc_status hoc_opt_trial_reserve(hoc_opt *o, const size_t *nodes, size_t n) {
     t->cap = cap;
   }
   if (slots > t->scap) {
-    size_t cap = slots > 2 * t->scap ? slots : 2 * t->scap;
+    size_t cap = slots;
     HOC_CHECK(grow((void **)&t->tslot_uv, 2 * cap, sizeof *t->tslot_uv) &&
                   grow((void **)&t->tnormal, 3 * cap, sizeof *t->tnormal),
               HOC_ERR_MEMORY, "out of memory for the optimiser's trial state");
