@@ -14,6 +14,29 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* The items of a list as 32-bit indices (the list is freed, and NULL
+ * returned when out of memory). */
+static uint32_t *narrow(hoc_growlist *g) {
+  uint32_t *w = hoc_realloc(NULL, g->n ? g->n : 1, sizeof *w);
+  for (size_t i = 0; w && i < g->n; ++i) w[i] = (uint32_t)g->v[i];
+  free(g->v);
+  g->v = NULL;
+  return w;
+}
+
+/* The weight of a carried node from its code kk * np + i: the barycentric
+ * coordinate for corner kk of local node i. */
+static double carry_weight(const hoc_quality_tables *t, unsigned code) {
+  size_t i = code % (unsigned)t->np;
+  unsigned kk = code / (unsigned)t->np;
+  double r = t->rs[2 * i], s = t->rs[2 * i + 1];
+  return kk == 0 ? 1 - r - s : kk == 1 ? r : s;
+}
+
+double hoc_opt_carry_w(const hoc_opt *o, size_t j) {
+  return carry_weight(o->t, o->B->carry_code[j]);
+}
+
 /* Blocks of family 0: vertices, edges, element interiors; of family 1:
  * single nodes. Their nodes, footprints, unknowns and carried nodes. */
 hoc_status hoc_opt_build_blocks(hoc_opt *o, int family) {
@@ -23,7 +46,7 @@ hoc_status hoc_opt_build_blocks(hoc_opt *o, int family) {
   int p = m->order;
   HOC_ALLOC(B->node_block, nn);
   HOC_ALLOC(B->node_off, nn);
-  for (size_t i = 0; i < nn; ++i) B->node_block[i] = SIZE_MAX;
+  for (size_t i = 0; i < nn; ++i) B->node_block[i] = HOC_OPT_NO_BLOCK;
   hoc_growlist start = {0}, nodes = {0};
   hoc_status status = HOC_OK;
   /* vertex blocks first, then edge blocks, then interior blocks */
@@ -34,8 +57,8 @@ hoc_status hoc_opt_build_blocks(hoc_opt *o, int family) {
         const size_t *cn = m->conn + e * np;
         for (size_t k = 0; k < np; ++k) {
           size_t i = cn[k];
-          if (!o->adj.ndof[i] || B->node_block[i] != SIZE_MAX) continue;
-          B->node_block[i] = start.n;
+          if (!o->adj.ndof[i] || B->node_block[i] != HOC_OPT_NO_BLOCK) continue;
+          B->node_block[i] = (uint32_t)start.n;
           HOC_TRY_GOTO(hoc_grow_push(&start, nodes.n), done);
           HOC_TRY_GOTO(hoc_grow_push(&nodes, i), done);
         }
@@ -45,8 +68,8 @@ hoc_status hoc_opt_build_blocks(hoc_opt *o, int family) {
       if (kind == 0) {
         for (int k = 0; k < 3; ++k) {
           size_t i = cn[k];
-          if (!o->adj.ndof[i] || B->node_block[i] != SIZE_MAX) continue;
-          B->node_block[i] = start.n;
+          if (!o->adj.ndof[i] || B->node_block[i] != HOC_OPT_NO_BLOCK) continue;
+          B->node_block[i] = (uint32_t)start.n;
           HOC_TRY_GOTO(hoc_grow_push(&start, nodes.n), done);
           HOC_TRY_GOTO(hoc_grow_push(&nodes, i), done);
         }
@@ -56,9 +79,9 @@ hoc_status hoc_opt_build_blocks(hoc_opt *o, int family) {
           size_t first = nodes.n;
           for (int j = 0; j < p - 1; ++j) {
             size_t i = cn[3 + k * (p - 1) + j];
-            if (!o->adj.ndof[i] || B->node_block[i] != SIZE_MAX) continue;
+            if (!o->adj.ndof[i] || B->node_block[i] != HOC_OPT_NO_BLOCK) continue;
             if (nodes.n == first) HOC_TRY_GOTO(hoc_grow_push(&start, nodes.n), done);
-            B->node_block[i] = start.n - 1;
+            B->node_block[i] = (uint32_t)(start.n - 1);
             HOC_TRY_GOTO(hoc_grow_push(&nodes, i), done);
           }
         }
@@ -66,9 +89,9 @@ hoc_status hoc_opt_build_blocks(hoc_opt *o, int family) {
         size_t first = nodes.n;
         for (size_t k = 3 * (size_t)p; k < np; ++k) {
           size_t i = cn[k];
-          if (!o->adj.ndof[i] || B->node_block[i] != SIZE_MAX) continue;
+          if (!o->adj.ndof[i] || B->node_block[i] != HOC_OPT_NO_BLOCK) continue;
           if (nodes.n == first) HOC_TRY_GOTO(hoc_grow_push(&start, nodes.n), done);
-          B->node_block[i] = start.n - 1;
+          B->node_block[i] = (uint32_t)(start.n - 1);
           HOC_TRY_GOTO(hoc_grow_push(&nodes, i), done);
         }
       }
@@ -76,8 +99,12 @@ hoc_status hoc_opt_build_blocks(hoc_opt *o, int family) {
   size_t nb = start.n;
   B->n_blocks = nb;
   HOC_TRY_GOTO(hoc_grow_push(&start, nodes.n), done);
-  B->bn_start = start.v;
-  B->bn_node = nodes.v;
+  B->bn_start = narrow(&start);
+  B->bn_node = narrow(&nodes);
+  if (!B->bn_start || !B->bn_node) {
+    status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
+    goto done;
+  }
   start.v = nodes.v = NULL;
   /* unknowns */
   B->bd_start = hoc_calloc(nb + 1, sizeof *B->bd_start);
@@ -91,7 +118,7 @@ hoc_status hoc_opt_build_blocks(hoc_opt *o, int family) {
       B->node_off[B->bn_node[a]] = off;
       off += o->adj.ndof[B->bn_node[a]];
     }
-    B->bd_start[b + 1] = B->bd_start[b] + (size_t)off;
+    B->bd_start[b + 1] = B->bd_start[b] + (uint32_t)off;
     if (off > B->max_nd) B->max_nd = off;
   }
   /* footprints: the elements of the block's nodes */
@@ -110,15 +137,17 @@ hoc_status hoc_opt_build_blocks(hoc_opt *o, int family) {
       }
     }
     if (status == HOC_OK) status = hoc_grow_push(&fs, fe.n);
-    B->be_start = fs.v;
-    B->be_elem = fe.v;
+    B->be_start = narrow(&fs);
+    B->be_elem = narrow(&fe);
+    if (status == HOC_OK && (!B->be_start || !B->be_elem))
+      status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
     if (status != HOC_OK) goto done;
   }
   /* carried nodes of face-interior vertex blocks */
   {
     hoc_growlist cs = {0}, cn = {0};
-    double *w = NULL;
-    size_t wcap = 0;
+    uint16_t *code = NULL; /* each carried node's weight (hoc_opt_carry_w) */
+    size_t ccap = 0;
     size_t *last = hoc_realloc(NULL, nn + 1, sizeof *last); /* block that last took the node */
     if (!last) status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
     for (size_t i = 0; last && i <= nn; ++i)
@@ -138,30 +167,35 @@ hoc_status hoc_opt_build_blocks(hoc_opt *o, int family) {
           size_t node = m->conn[e * np + i];
           if (o->adj.ndof[node] != 2 || m->entity[node] != m->entity[k] || last[node] == b)
             continue;
-          double r = o->t->rs[2 * i], s = o->t->rs[2 * i + 1];
-          double lam = kk == 0 ? 1 - r - s : kk == 1 ? r : s;
-          if (!(lam > HOC_OPT_CARRY_MIN_WEIGHT)) continue;
+          uint16_t c = (uint16_t)((size_t)kk * np + i);
+          if (!(carry_weight(o->t, c) > HOC_OPT_CARRY_MIN_WEIGHT)) continue;
           last[node] = b;
           status = hoc_grow_push(&cn, node);
           if (status != HOC_OK) break;
-          if (cn.n > wcap) {
-            wcap = cn.cap;
-            double *w2 = hoc_realloc(w, wcap, sizeof *w2);
-            if (!w2) {
+          if (cn.n > ccap) {
+            ccap = cn.cap;
+            uint16_t *c2 = hoc_realloc(code, ccap, sizeof *c2);
+            if (!c2) {
               status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
               break;
             }
-            w = w2;
+            code = c2;
           }
-          w[cn.n - 1] = lam;
+          code[cn.n - 1] = c;
         }
       }
     }
     free(last);
     if (status == HOC_OK) status = hoc_grow_push(&cs, cn.n);
-    B->carry_start = cs.v;
-    B->carry_node = cn.v;
-    B->carry_w = w;
+    if (status == HOC_OK && code) {
+      uint16_t *c2 = hoc_realloc(code, cn.n ? cn.n : 1, sizeof *c2);
+      if (c2) code = c2; /* (a failed shrink keeps the larger block) */
+    }
+    B->carry_code = code;
+    B->carry_start = narrow(&cs);
+    B->carry_node = narrow(&cn);
+    if (status == HOC_OK && (!B->carry_start || !B->carry_node))
+      status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
     if (status != HOC_OK) goto done;
   }
   /* colours: blocks touching a common element differ; every element's
@@ -181,8 +215,8 @@ hoc_status hoc_opt_build_blocks(hoc_opt *o, int family) {
       for (size_t a = B->be_start[b]; a < B->be_start[b + 1]; ++a) {
         const size_t *cn = m->conn + B->be_elem[a] * np;
         for (size_t k = 0; k < np; ++k) {
-          size_t b2 = B->node_block[cn[k]];
-          if (b2 != SIZE_MAX && color[b2] >= 0) stamp[color[b2]] = b + 1;
+          uint32_t b2 = B->node_block[cn[k]];
+          if (b2 != HOC_OPT_NO_BLOCK && color[b2] >= 0) stamp[color[b2]] = b + 1;
         }
       }
       int c = 0;
@@ -208,6 +242,20 @@ hoc_status hoc_opt_build_blocks(hoc_opt *o, int family) {
       hoc_opt_csr_finish_counts((size_t)max_colors, B->color_start);
       for (size_t b = 0; b < nb; ++b) B->color_block[B->color_start[color[b]]++] = b;
       hoc_opt_csr_restore((size_t)max_colors, B->color_start);
+      B->cpos = hoc_calloc(nb + 1, sizeof *B->cpos);
+      B->cbd = hoc_calloc(nb + 1, sizeof *B->cbd);
+      if (!B->cpos || !B->cbd) status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
+    }
+    for (int c = 0; c < max_colors && status == HOC_OK; ++c) {
+      size_t first = B->color_start[c], nd = 0;
+      for (size_t a = first; a < B->color_start[c + 1]; ++a) {
+        size_t b = B->color_block[a];
+        B->cpos[b] = (uint32_t)(a - first);
+        B->cbd[b] = (uint32_t)nd;
+        nd += B->bd_start[b + 1] - B->bd_start[b];
+      }
+      if (B->color_start[c + 1] - first > B->max_color) B->max_color = B->color_start[c + 1] - first;
+      if (nd > B->max_color_nd) B->max_color_nd = nd;
     }
     if (status == HOC_OK) {
       B->block_color = color;
@@ -219,7 +267,7 @@ hoc_status hoc_opt_build_blocks(hoc_opt *o, int family) {
       if (!B->queue_head || !B->queue_next || !B->queued || !B->scan_all)
         status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
       for (int c = 0; c < max_colors && status == HOC_OK; ++c) {
-        B->queue_head[c] = SIZE_MAX;
+        B->queue_head[c] = HOC_OPT_NO_BLOCK;
         B->scan_all[c] = 1;
       }
     }
@@ -234,7 +282,7 @@ done:
 
 double hoc_opt_carry_weight(const hoc_opt *o, size_t b, size_t node) {
   for (size_t j = o->B->carry_start[b]; j < o->B->carry_start[b + 1]; ++j)
-    if (o->B->carry_node[j] == node) return o->B->carry_w[j];
+    if (o->B->carry_node[j] == node) return hoc_opt_carry_w(o, j);
   return 0;
 }
 
@@ -260,12 +308,13 @@ void hoc_opt_wake_node(hoc_opt *o, size_t k) {
   o->node.active[k] = 1;
   for (int f = 0; f < 2; ++f) {
     hoc_opt_blockset *B = &o->fam[f];
+    if (B->node_block[k] == HOC_OPT_NO_BLOCK) continue;
     size_t b = B->node_block[k];
-    if (b == SIZE_MAX || B->queued[b]) continue;
+    if (B->queued[b]) continue;
     B->queued[b] = 1;
     int c = B->block_color[b];
     B->queue_next[b] = B->queue_head[c];
-    B->queue_head[c] = b;
+    B->queue_head[c] = (uint32_t)b;
   }
 }
 
@@ -287,12 +336,12 @@ void hoc_opt_mark_near(hoc_opt *o) {
 size_t hoc_opt_select_active(hoc_opt *o, int color) {
   hoc_opt_blockset *B = o->B;
   size_t n = 0;
-  for (size_t b = B->queue_head[color], next; b != SIZE_MAX; b = next) {
+  for (size_t b = B->queue_head[color], next; b != HOC_OPT_NO_BLOCK; b = next) {
     next = B->queue_next[b];
     B->queued[b] = 0;
     if (!B->scan_all[color] && block_active(o, b)) o->trial.list[n++] = b;
   }
-  B->queue_head[color] = SIZE_MAX;
+  B->queue_head[color] = HOC_OPT_NO_BLOCK;
   if (B->scan_all[color]) {
     B->scan_all[color] = 0;
     for (size_t a = B->color_start[color]; a < B->color_start[color + 1]; ++a)

@@ -69,7 +69,9 @@ hoc_status hoc_mesh_optimize(hoc_mesh *mesh, const hoc_optimize_options *options
   hoc_opt_snapshot start = {0}, first = {0};
   hoc_optimize_result a = {0}, b = {0};
   int limited = 0, limited_b;
-  hoc_status status = hoc_opt_snapshot_take(&start, mesh, 0, 0);
+  /* the start is kept only where a protected run may follow (below) */
+  int may_protect = mesh->order <= HOC_OPT_PROTECT_MAX_ORDER && !(options && options->free_elements);
+  hoc_status status = may_protect ? hoc_opt_snapshot_take(&start, mesh, 0, 0) : HOC_OK;
   if (status == HOC_OK) status = hoc_opt_run(mesh, options, 0, 0, t0, &a, &limited);
   /* Left tangled (not for want of sweeps): a protected run from the start,
    * in which the sampled phase's steps may not fold an element between
@@ -81,8 +83,7 @@ hoc_status hoc_mesh_optimize(hoc_mesh *mesh, const hoc_optimize_options *options
    * fewer. Not above HOC_OPT_PROTECT_MAX_ORDER (tunables.h), and not in a
    * local repair (free_elements): it runs the exact test from its first
    * sweep, as a protected run would, so that run would only repeat it. */
-  if (status == HOC_OK && a.tangled_final && !limited && mesh->order <= HOC_OPT_PROTECT_MAX_ORDER &&
-      !(options && options->free_elements)) {
+  if (status == HOC_OK && a.tangled_final && !limited && may_protect) {
     status = hoc_opt_snapshot_take(&first, mesh, a.tangled_final, a.objective_final);
     if (status == HOC_OK) {
       hoc_opt_snapshot_restore(&start, mesh);

@@ -16,11 +16,10 @@
  * carries follow), positions and normals evaluated on the CAD. */
 static hoc_status block_f_at(hoc_opt *o, size_t b, int dof, double h, hoc_opt_scratch *s,
                              double *f) {
-  double *st = o->trial.step + o->B->bd_start[b];
+  double *st = hoc_opt_step_of(o, b);
   int nd = (int)(o->B->bd_start[b + 1] - o->B->bd_start[b]);
   for (int c = 0; c < nd; ++c) st[c] = c == dof ? h : 0;
-  o->trial.alpha[b] = 1;
-  hoc_opt_set_trial_params(o, b);
+  o->trial.alpha[hoc_opt_tb(o, b)] = 1;
   size_t n = 0;
   size_t nlist =
       o->B->bn_start[b + 1] - o->B->bn_start[b] + o->B->carry_start[b + 1] - o->B->carry_start[b];
@@ -29,7 +28,11 @@ static hoc_status block_f_at(hoc_opt *o, size_t b, int dof, double h, hoc_opt_sc
   for (size_t c = o->B->bn_start[b]; c < o->B->bn_start[b + 1]; ++c) list[n++] = o->B->bn_node[c];
   for (size_t j = o->B->carry_start[b]; j < o->B->carry_start[b + 1]; ++j)
     list[n++] = o->B->carry_node[j];
-  hoc_status st2 = hoc_opt_eval_trials(o, list, n, 1);
+  hoc_status st2 = hoc_opt_trial_reserve(o, list, n);
+  if (st2 == HOC_OK) {
+    hoc_opt_set_trial_params(o, b);
+    st2 = hoc_opt_eval_trials(o, list, n, 1);
+  }
   free(list);
   HOC_TRY(st2);
   hoc_opt_set_moving(o, b, 1);

@@ -35,9 +35,11 @@ void hoc_opt_frames_trial(const hoc_opt *o, size_t e, const double *fr, double *
   for (size_t i = 0; i < np; ++i) {
     if (!o->node.moving[cn[i]]) continue;
     double dx[3], dn[3];
+    const double *tx = hoc_opt_txyz(o, cn[i]),
+                 *tn = o->trial.tnormal + 3 * hoc_opt_tslot(o, cn[i], sl[i]);
     for (int c = 0; c < 3; ++c) {
-      dx[c] = o->trial.txyz[3 * cn[i] + c] - m->xyz[3 * cn[i] + c];
-      dn[c] = o->trial.tnormal[3 * sl[i] + c] - o->node.normal[3 * sl[i] + c];
+      dx[c] = tx[c] - m->xyz[3 * cn[i] + c];
+      dn[c] = tn[c] - o->node.normal[3 * sl[i] + c];
     }
     hoc_element_frames_move(o->t, from, (int)i, dx, dn, out);
     from = out;
@@ -71,8 +73,10 @@ void hoc_opt_gather(const hoc_opt *o, size_t e, double *x, double *n) {
   const size_t *cn = m->conn + e * np, *sl = m->elem_slot + e * np;
   for (size_t i = 0; i < np; ++i) {
     int mv = o->node.moving[cn[i]];
-    memcpy(x + 3 * i, (mv ? o->trial.txyz : m->xyz) + 3 * cn[i], 3 * sizeof *x);
-    memcpy(n + 3 * i, (mv ? o->trial.tnormal : o->node.normal) + 3 * sl[i], 3 * sizeof *n);
+    memcpy(x + 3 * i, mv ? hoc_opt_txyz(o, cn[i]) : m->xyz + 3 * cn[i], 3 * sizeof *x);
+    memcpy(n + 3 * i,
+           mv ? o->trial.tnormal + 3 * hoc_opt_tslot(o, cn[i], sl[i]) : o->node.normal + 3 * sl[i],
+           3 * sizeof *n);
   }
 }
 
@@ -254,17 +258,41 @@ hoc_status hoc_opt_sweep_start(hoc_opt *o, double *objective, double *min_q, siz
   return HOC_OK;
 }
 
+/* A node's decision from its summed contributions c[5] (g0 g1 h00 h01
+ * h11): awake if near a tangle or if its estimated gain is not below the
+ * threshold. */
+static unsigned char screen_node(const hoc_opt *o, size_t k, const double *c, int near) {
+  double gain;
+  if (o->adj.ndof[k] == 2) {
+    double det = c[2] * c[4] - c[3] * c[3];
+    gain = det > 0 ? 0.5 * (c[4] * c[0] * c[0] - 2 * c[3] * c[0] * c[1] + c[2] * c[1] * c[1]) / det
+                   : INFINITY;
+  } else {
+    gain = c[2] > 0 ? 0.5 * c[0] * c[0] / c[2] : INFINITY;
+  }
+  return (unsigned char)(near || !(gain < o->cfg.min_gain));
+}
+
 /* Screening: every node's single-node Gauss-Newton decrease estimate
  * 0.5 g^T H^-1 g from one evaluation per element (instead of one per block
  * through each element); nodes whose estimate is below the gain threshold
- * (and not near a tangle) start asleep. Element contributions are stored
- * and summed per node in element order, so the result does not depend on
- * the thread count. */
+ * (and not near a tangle) start asleep. A node inside one element is
+ * decided there; the contributions of the nodes on the elements' edges are
+ * stored and summed per node in element order, so the result does not
+ * depend on the thread count. */
 hoc_status hoc_opt_screen(hoc_opt *o) {
   hoc_mesh *m = o->m;
   size_t ne = m->n_elems, np = (size_t)o->np;
-  /* [ne][np][g0 g1 h00 h01 h11], every entry written below (not zeroed) */
-  double *contrib = hoc_realloc(NULL, 5 * ne * np + 1, sizeof *contrib);
+  /* the stored local nodes: the corners and edge nodes (the first 3p),
+   * unless an element's inner node is shared (a mesh read as given) */
+  size_t nb = 3 * (size_t)m->order < np ? 3 * (size_t)m->order : np;
+  for (size_t e = 0; e < ne && nb < np; ++e)
+    for (size_t i = nb; i < np && nb < np; ++i) {
+      size_t k = m->conn[e * np + i];
+      if (o->adj.ne_start[k + 1] - o->adj.ne_start[k] != 1) nb = np;
+    }
+  /* [ne][nb][g0 g1 h00 h01 h11], every entry written below (not zeroed) */
+  double *contrib = hoc_realloc(NULL, 5 * ne * nb + 1, sizeof *contrib);
   HOC_CHECK(contrib, HOC_ERR_MEMORY, "out of memory");
   int nr_max = o->nq + o->np + o->t->nv + 1, failed = 0; /* + 1: a fold point */
 #pragma omp parallel
@@ -300,10 +328,18 @@ hoc_status hoc_opt_screen(hoc_opt *o) {
           c[3] += 2 * z0 * z1;
           c[4] += 2 * z1 * z1;
         }
+        if (i >= nb) {
+          /* the node's only element: its sum is this (as in the loop below) */
+          if (!need[i]) continue;
+          double sum[5] = {0, 0, 0, 0, 0};
+          for (int d = 0; d < 5; ++d) sum[d] += c[d];
+          o->node.active[cn[i]] = screen_node(o, cn[i], sum, o->el.region[e] || !o->el.valid[e]);
+          continue;
+        }
         /* written once, never read first: a fresh page read before it is
          * written is copied from the zero page, and with two threads every
          * such copy flushes the other core's TLB */
-        memcpy(contrib + 5 * (e * np + i), c, sizeof c);
+        memcpy(contrib + 5 * (e * nb + i), c, sizeof c);
       }
     }
     free(need);
@@ -316,24 +352,17 @@ hoc_status hoc_opt_screen(hoc_opt *o) {
 #pragma omp parallel for schedule(static)
   for (size_t k = 0; k < m->n_nodes; ++k) {
     if (!o->adj.ndof[k]) continue;
+    size_t a0 = o->adj.ne_start[k];
+    if (o->adj.ne_start[k + 1] - a0 == 1 && (size_t)o->adj.ne_local[a0] >= nb) continue;
     double c[5] = {0, 0, 0, 0, 0};
     int near = 0;
-    for (size_t a = o->adj.ne_start[k]; a < o->adj.ne_start[k + 1]; ++a) {
+    for (size_t a = a0; a < o->adj.ne_start[k + 1]; ++a) {
       size_t e = o->adj.ne_elem[a];
-      const double *ce = contrib + 5 * (e * np + (size_t)o->adj.ne_local[a]);
+      const double *ce = contrib + 5 * (e * nb + (size_t)o->adj.ne_local[a]);
       for (int d = 0; d < 5; ++d) c[d] += ce[d];
       near |= o->el.region[e] || !o->el.valid[e];
     }
-    double gain;
-    if (o->adj.ndof[k] == 2) {
-      double det = c[2] * c[4] - c[3] * c[3];
-      gain = det > 0
-                 ? 0.5 * (c[4] * c[0] * c[0] - 2 * c[3] * c[0] * c[1] + c[2] * c[1] * c[1]) / det
-                 : INFINITY;
-    } else {
-      gain = c[2] > 0 ? 0.5 * c[0] * c[0] / c[2] : INFINITY;
-    }
-    o->node.active[k] = near || !(gain < o->cfg.min_gain);
+    o->node.active[k] = screen_node(o, k, c, near);
   }
   free(contrib);
   return HOC_OK;

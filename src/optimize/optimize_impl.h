@@ -53,26 +53,37 @@
 #include <stddef.h>
 #include <stdint.h>
 
-/* A family of blocks: each block a set of free nodes updated together. */
+/* hoc_opt_blockset.node_block of a node in no block; the end of a queue. */
+#define HOC_OPT_NO_BLOCK UINT32_MAX
+
+/* A family of blocks: each block a set of free nodes updated together.
+ * Node, element and list indices are 32-bit (hoc_opt_setup checks the
+ * mesh's sizes): the lists of single-node blocks hold several entries per
+ * node of the mesh, most of the optimiser's memory at high orders. */
 typedef struct hoc_opt_blockset {
   size_t n_blocks;
-  size_t *bn_start, *bn_node; /* block -> its nodes */
-  size_t *be_start, *be_elem; /* block -> the elements it touches */
-  size_t *bd_start;           /* block -> first of its unknowns in step[] */
-  size_t *node_block;         /* [n_nodes] block of a free node (SIZE_MAX if fixed) */
-  int *node_off;              /* [n_nodes] offset of the node's unknowns in its block */
-  size_t *carry_start;        /* [n_blocks+1] nodes a vertex block carries ... */
-  size_t *carry_node;
-  double *carry_w; /* ... and their weights */
+  uint32_t *bn_start, *bn_node; /* block -> its nodes */
+  uint32_t *be_start, *be_elem; /* block -> the elements it touches */
+  uint32_t *bd_start;           /* block -> first of its unknowns */
+  uint32_t *node_block;         /* [n_nodes] block of a free node (HOC_OPT_NO_BLOCK if fixed) */
+  int *node_off;                /* [n_nodes] offset of the node's unknowns in its block */
+  uint32_t *carry_start;        /* [n_blocks+1] nodes a vertex block carries ... */
+  uint32_t *carry_node;
+  uint16_t *carry_code; /* ... and their weights, as corner * np + local node of the element
+                           they were found in (hoc_opt_carry_w) */
   int max_nd;      /* most unknowns in a block */
   int n_colors;
   size_t *color_start; /* [n_colors+1] */
   size_t *color_block;
+  /* The block's place among its colour's blocks and the first of its
+   * unknowns among theirs: where its trial values are (hoc_opt_trial) */
+  uint32_t *cpos, *cbd;       /* [n_blocks] */
+  size_t max_color, max_color_nd; /* most blocks and unknowns in a colour */
   /* Blocks woken since their colour last ran, per colour (most sleep: a
    * colour then looks at these instead of all its blocks) */
   int *block_color;        /* [n_blocks] */
-  size_t *queue_head;      /* [n_colors] first queued block, SIZE_MAX if none */
-  size_t *queue_next;      /* [n_blocks] next in its colour's queue */
+  uint32_t *queue_head;    /* [n_colors] first queued block, HOC_OPT_NO_BLOCK if none */
+  uint32_t *queue_next;    /* [n_blocks] next in its colour's queue */
   unsigned char *queued;   /* [n_blocks] */
   unsigned char *scan_all; /* [n_colors] every block may be active: look at all */
 } hoc_opt_blockset;
@@ -80,13 +91,13 @@ typedef struct hoc_opt_blockset {
 /* Adjacency and unknowns: fixed once set up. */
 typedef struct hoc_opt_adjacency {
   unsigned char *ndof; /* [n_nodes] unknowns of the node: 0, 1 (t) or 2 (u, v) */
-  size_t *ne_start;    /* [n_nodes+1] node -> elements */
-  size_t *ne_elem;     /* element */
-  int *ne_local;       /* local index of the node in it */
-  size_t *ns_start;    /* [n_nodes+1] node -> slots */
-  size_t *ns_slot;
-  size_t *nl_start; /* [n_nodes+1] node -> lines */
-  size_t *nl_line;
+  uint32_t *ne_start; /* [n_nodes+1] node -> elements (32-bit, as the block lists) */
+  uint32_t *ne_elem;  /* element */
+  int *ne_local;      /* local index of the node in it */
+  uint32_t *ns_start; /* [n_nodes+1] node -> slots */
+  uint32_t *ns_slot;
+  uint32_t *nl_start; /* [n_nodes+1] node -> lines */
+  uint32_t *nl_line;
   double *hsize;              /* [n_nodes] local length: bound on one step's displacement */
   unsigned char *on_boundary; /* [n_elems] has a node on a CAD curve or vertex: kept unfolded in
                                  (u,v) so no node leaves the trimmed face (inside, 3D validity
@@ -140,20 +151,30 @@ typedef struct hoc_opt_settings {
   int wake_near_only; /* the untangling factor only for blocks with a node in node.near */
 } hoc_opt_settings;
 
-/* Trial state of the blocks of a colour and of their nodes. */
+/* Trial state of the blocks of a colour and of their nodes. A block's
+ * values are at its place in its colour (hoc_opt_blockset.cpos, cbd): the
+ * arrays hold one colour's blocks, not every block of the mesh. */
 typedef struct hoc_opt_trial {
-  double *step;         /* [unknowns] Gauss-Newton direction of each block */
-  double *alpha;        /* [n_blocks] step length */
-  double *f0, *fnew;    /* [n_blocks] local objective before / after */
-  double *slope;        /* [n_blocks] g . step (< 0) */
-  unsigned char *state; /* [n_blocks] 0 idle, 1 trying, 2 accepted */
-  size_t *list;         /* [n_blocks] scratch */
-  size_t *committed;    /* [n_blocks] blocks of the current colour that moved */
-  double *tpar;         /* [n_nodes][2] trial parameters */
-  double *txyz;         /* [n_nodes][3] */
-  double *tdz;          /* [n_nodes][6] */
-  double *tslot_uv;     /* [n_slots][2] */
-  double *tnormal;      /* [n_slots][3] */
+  double *step;         /* [unknowns of a colour] Gauss-Newton direction of each block */
+  double *alpha;        /* [blocks of a colour] step length */
+  double *f0, *fnew;    /* [blocks of a colour] local objective before / after */
+  double *slope;        /* [blocks of a colour] g . step (< 0) */
+  unsigned char *state; /* [blocks of a colour] 0 idle, 1 trying, 2 accepted */
+  size_t *list;         /* [blocks of a colour] scratch */
+  size_t *committed;    /* [blocks of a colour] blocks of the current colour that moved */
+  /* The trial state of the nodes being tried (a colour's blocks, a polish
+   * move): node k's at index tix[k] of the arrays below, its slots from
+   * tsbase[tix[k]] on, in the order of adj.ns_slot (hoc_opt_trial_reserve).
+   * Sized for the nodes of one trial, not the mesh: at high orders the
+   * mesh's nodes and slots are many, a colour's a small share of them. */
+  uint32_t *tix;        /* [n_nodes] the node's index in the current trial */
+  size_t cap, scap;     /* nodes and slots the arrays hold */
+  double *tpar;         /* [cap][2] trial parameters */
+  double *txyz;         /* [cap][3] */
+  double *tdz;          /* [cap][6] */
+  size_t *tsbase;       /* [cap] first trial slot of the node */
+  double *tslot_uv;     /* [scap][2] */
+  double *tnormal;      /* [scap][3] */
 } hoc_opt_trial;
 
 /* Frames of elements (hoc_element_frames: D phi's columns and the
@@ -214,6 +235,14 @@ typedef struct hoc_opt_snapshot {
   double objective;
 } hoc_opt_snapshot;
 
+/* Block b's (of o->B) place in the trial's per-block arrays, and its step. */
+static inline size_t hoc_opt_tb(const hoc_opt *o, size_t b) {
+  return o->B->cpos[b];
+}
+static inline double *hoc_opt_step_of(const hoc_opt *o, size_t b) {
+  return o->trial.step + o->B->cbd[b];
+}
+
 /* Element e may not fold between the samples (its steps run the exact
  * tests): every element of a protected run, the fragile ones of any run. */
 static inline int hoc_opt_guarded(const hoc_opt *o, size_t e) {
@@ -251,6 +280,8 @@ hoc_status hoc_grow_push(hoc_growlist *g, size_t x);
 hoc_status hoc_opt_build_blocks(hoc_opt *o, int family);
 /* Weight with which block b (of o->B) carries node (0: not carried). */
 double hoc_opt_carry_weight(const hoc_opt *o, size_t b, size_t node);
+/* Weight of the carried node carry_node[j] of o->B. */
+double hoc_opt_carry_w(const hoc_opt *o, size_t j);
 /* Flags block b's nodes and carried nodes as moving (v = 1) or not. */
 void hoc_opt_set_moving(hoc_opt *o, size_t b, unsigned char v);
 /* Node k awake, its blocks of both families queued on their colours. */
@@ -291,6 +322,26 @@ hoc_status hoc_opt_sweep_start(hoc_opt *o, double *objective, double *min_q, siz
 hoc_status hoc_opt_screen(hoc_opt *o);
 
 /* trial.c: trial parameters, CAD evaluation, acceptance ----------------- */
+
+/* Trial state for nodes[0..n) (no node twice): node nodes[a] at index a. */
+hoc_status hoc_opt_trial_reserve(hoc_opt *o, const size_t *nodes, size_t n);
+/* Node k's trial parameters [2], position [3], derivatives [6] (k reserved). */
+static inline double *hoc_opt_tpar(const hoc_opt *o, size_t k) {
+  return o->trial.tpar + 2 * (size_t)o->trial.tix[k];
+}
+static inline double *hoc_opt_txyz(const hoc_opt *o, size_t k) {
+  return o->trial.txyz + 3 * (size_t)o->trial.tix[k];
+}
+static inline double *hoc_opt_tdz(const hoc_opt *o, size_t k) {
+  return o->trial.tdz + 6 * (size_t)o->trial.tix[k];
+}
+/* The trial index of slot s of reserved node k (a face node has one slot,
+ * a curve node one per face around it). */
+static inline size_t hoc_opt_tslot(const hoc_opt *o, size_t k, size_t s) {
+  size_t j = o->adj.ns_start[k];
+  while (o->adj.ns_slot[j] != s) ++j;
+  return o->trial.tsbase[o->trial.tix[k]] + (j - o->adj.ns_start[k]);
+}
 
 /* (u, v) of node k's copy kk in element e in the trial state. */
 void hoc_opt_trial_elem_uv(const hoc_opt *o, size_t k, size_t e, int kk, double *uv);

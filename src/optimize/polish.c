@@ -113,13 +113,15 @@ static hoc_status polish_patch(hoc_opt *o, size_t e0, unsigned char *mark) {
         double speed = sqrt(dz[0] * dz[0] + dz[1] * dz[1] + dz[2] * dz[2]);
         if (!(speed > 0)) continue;
         double h = (dir % 2 ? -1 : 1) * share * o->adj.hsize[k] / speed;
-        o->trial.tpar[2 * k] = m->param[2 * k];
-        o->trial.tpar[2 * k + 1] = m->param[2 * k + 1];
-        o->trial.tpar[2 * k + d] += h;
+        status = hoc_opt_trial_reserve(o, &k, 1);
+        if (status != HOC_OK) goto done;
+        double *tp = hoc_opt_tpar(o, k);
+        tp[0] = m->param[2 * k];
+        tp[1] = m->param[2 * k + 1];
+        tp[d] += h;
         if (m->dim[k] == HOC_ON_CURVE) {
           const hoc_cad_curve *c = &o->model->curves[m->entity[k]];
-          if (!(c->period > 0) && (o->trial.tpar[2 * k] < c->lo || o->trial.tpar[2 * k] > c->hi))
-            continue;
+          if (!(c->period > 0) && (tp[0] < c->lo || tp[0] > c->hi)) continue;
         }
         status = hoc_opt_eval_trial(o, k);
         if (status != HOC_OK) goto done;

@@ -17,9 +17,9 @@ void hoc_opt_free(hoc_opt *o) {
   for (int f = 0; f < 2; ++f) {
     hoc_opt_blockset *b = &o->fam[f];
     void *q[] = {b->bn_start,    b->bn_node,     b->be_start,    b->be_elem,    b->bd_start,
-                 b->node_block,  b->node_off,    b->carry_start, b->carry_node, b->carry_w,
+                 b->node_block,  b->node_off,    b->carry_start, b->carry_node, b->carry_code,
                  b->color_start, b->color_block, b->block_color, b->queue_head, b->queue_next,
-                 b->queued,      b->scan_all};
+                 b->queued,      b->scan_all,    b->cpos,        b->cbd};
     for (size_t i = 0; i < sizeof q / sizeof *q; ++i) free(q[i]);
   }
   void *p[] = {
@@ -30,7 +30,7 @@ void hoc_opt_free(hoc_opt *o) {
       o->adj.hsize,       o->node.active,  o->node.moving,  o->trial.step,      o->trial.alpha,
       o->trial.f0,        o->trial.fnew,   o->trial.slope,  o->trial.state,     o->trial.list,
       o->trial.committed, o->trial.tpar,   o->trial.txyz,   o->trial.tdz,       o->trial.tslot_uv,
-      o->trial.tnormal,   o->el.xvalid,    o->node.near,    o->el.near_e,       o->adj.touched,
+      o->trial.tnormal,   o->trial.tix,    o->trial.tsbase, o->el.xvalid,    o->node.near,    o->el.near_e,       o->adj.touched,
       o->el.has_fold,     o->el.fold_rs,   o->el.fragile,   o->fc.slot,         o->fc.pool};
   for (size_t i = 0; i < sizeof p / sizeof *p; ++i) free(p[i]);
 }
@@ -95,6 +95,33 @@ static hoc_status restrict_free(hoc_opt *o, const unsigned char *flagged, int ri
   return HOC_OK;
 }
 
+/* A compressed row of n rows and `total` items (start[n+1], items[total])
+ * as 32-bit indices into *start32 and *items32; both given arrays freed. */
+static hoc_status narrow_csr(size_t n, size_t total, size_t **start, size_t **items,
+                             uint32_t **start32, uint32_t **items32) {
+  *start32 = hoc_realloc(NULL, n + 1, sizeof **start32);
+  *items32 = hoc_realloc(NULL, total + 1, sizeof **items32);
+  for (size_t i = 0; *start32 && i <= n; ++i) (*start32)[i] = (uint32_t)(*start)[i];
+  for (size_t i = 0; *items32 && i < total; ++i) (*items32)[i] = (uint32_t)(*items)[i];
+  free(*start);
+  free(*items);
+  *start = *items = NULL;
+  HOC_CHECK(*start32 && *items32, HOC_ERR_MEMORY, "out of memory for the optimiser's adjacency");
+  return HOC_OK;
+}
+
+/* hoc_opt_csr_alloc into arrays of the caller's (nothing left allocated
+ * on failure). */
+static hoc_status csr_alloc_local(size_t n, size_t total, size_t **start, size_t **items) {
+  hoc_status status = hoc_opt_csr_alloc(n, total, start, items);
+  if (status != HOC_OK) {
+    free(*start);
+    free(*items);
+    *start = *items = NULL;
+  }
+  return status;
+}
+
 hoc_status hoc_opt_setup(hoc_opt *o, hoc_mesh *m, hoc_measure measure, int fix_curves,
                         const unsigned char *free_elements, int free_rings) {
   memset(o, 0, sizeof *o);
@@ -106,32 +133,42 @@ hoc_status hoc_opt_setup(hoc_opt *o, hoc_mesh *m, hoc_measure measure, int fix_c
   o->np = o->t->np;
   o->nq = o->t->nq;
   size_t nn = m->n_nodes, ne = m->n_elems, np = (size_t)o->np;
+  /* (node, element and list indices of the blocks and of a trial are
+   * 32-bit: a block list has at most 3 entries per node of an element) */
+  HOC_CHECK(nn < UINT32_MAX / 2 && ne * np < UINT32_MAX / 4 && m->n_slots < UINT32_MAX / 4 &&
+                m->n_lines * ((size_t)m->order + 1) < UINT32_MAX / 4,
+            HOC_ERR_ARGUMENT,
+            "mesh too large for the optimiser (%zu nodes, %zu elements)", nn, ne);
   HOC_ALLOC(o->adj.ndof, nn);
   HOC_ALLOC(o->adj.ne_local, ne * np + 1);
-  HOC_TRY(hoc_opt_csr_alloc(nn, ne * np, &o->adj.ne_start, &o->adj.ne_elem));
+  size_t *start = NULL, *items = NULL;
+  HOC_TRY(csr_alloc_local(nn, ne * np, &start, &items));
   for (size_t e = 0; e < ne; ++e)
-    for (size_t k = 0; k < np; ++k) o->adj.ne_start[m->conn[e * np + k] + 1]++;
-  hoc_opt_csr_finish_counts(nn, o->adj.ne_start);
+    for (size_t k = 0; k < np; ++k) start[m->conn[e * np + k] + 1]++;
+  hoc_opt_csr_finish_counts(nn, start);
   for (size_t e = 0; e < ne; ++e)
     for (size_t k = 0; k < np; ++k) {
-      size_t i = m->conn[e * np + k], pos = o->adj.ne_start[i]++;
-      o->adj.ne_elem[pos] = e;
+      size_t i = m->conn[e * np + k], pos = start[i]++;
+      items[pos] = e;
       o->adj.ne_local[pos] = (int)k;
     }
-  hoc_opt_csr_restore(nn, o->adj.ne_start);
-  HOC_TRY(hoc_opt_csr_alloc(nn, m->n_slots, &o->adj.ns_start, &o->adj.ns_slot));
-  for (size_t s = 0; s < m->n_slots; ++s) o->adj.ns_start[m->slot_node[s] + 1]++;
-  hoc_opt_csr_finish_counts(nn, o->adj.ns_start);
-  for (size_t s = 0; s < m->n_slots; ++s) o->adj.ns_slot[o->adj.ns_start[m->slot_node[s]]++] = s;
-  hoc_opt_csr_restore(nn, o->adj.ns_start);
+  hoc_opt_csr_restore(nn, start);
+  HOC_TRY(narrow_csr(nn, ne * np, &start, &items, &o->adj.ne_start, &o->adj.ne_elem));
+  HOC_TRY(csr_alloc_local(nn, m->n_slots, &start, &items));
+  for (size_t s = 0; s < m->n_slots; ++s) start[m->slot_node[s] + 1]++;
+  hoc_opt_csr_finish_counts(nn, start);
+  for (size_t s = 0; s < m->n_slots; ++s) items[start[m->slot_node[s]]++] = s;
+  hoc_opt_csr_restore(nn, start);
+  HOC_TRY(narrow_csr(nn, m->n_slots, &start, &items, &o->adj.ns_start, &o->adj.ns_slot));
   size_t lp = (size_t)m->order + 1;
-  HOC_TRY(hoc_opt_csr_alloc(nn, m->n_lines * lp, &o->adj.nl_start, &o->adj.nl_line));
+  HOC_TRY(csr_alloc_local(nn, m->n_lines * lp, &start, &items));
   for (size_t l = 0; l < m->n_lines; ++l)
-    for (size_t k = 0; k < lp; ++k) o->adj.nl_start[m->line_conn[l * lp + k] + 1]++;
-  hoc_opt_csr_finish_counts(nn, o->adj.nl_start);
+    for (size_t k = 0; k < lp; ++k) start[m->line_conn[l * lp + k] + 1]++;
+  hoc_opt_csr_finish_counts(nn, start);
   for (size_t l = 0; l < m->n_lines; ++l)
-    for (size_t k = 0; k < lp; ++k) o->adj.nl_line[o->adj.nl_start[m->line_conn[l * lp + k]]++] = l;
-  hoc_opt_csr_restore(nn, o->adj.nl_start);
+    for (size_t k = 0; k < lp; ++k) items[start[m->line_conn[l * lp + k]]++] = l;
+  hoc_opt_csr_restore(nn, start);
+  HOC_TRY(narrow_csr(nn, m->n_lines * lp, &start, &items, &o->adj.nl_start, &o->adj.nl_line));
   for (size_t i = 0; i < nn; ++i) {
     if (o->adj.ne_start[i + 1] == o->adj.ne_start[i]) continue; /* used by no element */
     if (m->dim[i] == HOC_ON_FACE) o->adj.ndof[i] = 2;
@@ -147,10 +184,10 @@ hoc_status hoc_opt_setup(hoc_opt *o, hoc_mesh *m, hoc_measure measure, int fix_c
   HOC_TRY(hoc_par_error_raise(&err));
   o->B = &o->fam[0]; /* family 0 is current by default */
   o->max_nd = o->fam[0].max_nd > o->fam[1].max_nd ? o->fam[0].max_nd : o->fam[1].max_nd;
-  size_t nb = o->fam[0].n_blocks > o->fam[1].n_blocks ? o->fam[0].n_blocks : o->fam[1].n_blocks;
-  size_t nd_total = o->fam[0].bd_start[o->fam[0].n_blocks] > o->fam[1].bd_start[o->fam[1].n_blocks]
-                        ? o->fam[0].bd_start[o->fam[0].n_blocks]
-                        : o->fam[1].bd_start[o->fam[1].n_blocks];
+  /* the trial's per-block arrays hold the largest colour of either family */
+  size_t nb = o->fam[0].max_color > o->fam[1].max_color ? o->fam[0].max_color : o->fam[1].max_color;
+  size_t nd_total = o->fam[0].max_color_nd > o->fam[1].max_color_nd ? o->fam[0].max_color_nd
+                                                                     : o->fam[1].max_color_nd;
   HOC_ALLOC(o->node.dz, 6 * nn);
   HOC_ALLOC(o->node.normal, 3 * m->n_slots + 3);
   HOC_ALLOC(o->el.delta, ne);
@@ -185,11 +222,7 @@ hoc_status hoc_opt_setup(hoc_opt *o, hoc_mesh *m, hoc_measure measure, int fix_c
   HOC_ALLOC(o->trial.state, nb + 1);
   HOC_ALLOC(o->trial.list, nb + 1);
   HOC_ALLOC(o->trial.committed, nb + 1);
-  HOC_ALLOC(o->trial.tpar, 2 * nn);
-  HOC_ALLOC(o->trial.txyz, 3 * nn);
-  HOC_ALLOC(o->trial.tdz, 6 * nn);
-  HOC_ALLOC(o->trial.tslot_uv, 2 * m->n_slots + 2);
-  HOC_ALLOC(o->trial.tnormal, 3 * m->n_slots + 3);
+  HOC_ALLOC(o->trial.tix, nn + 1);
   /* local length: the longest edge of the linear sub-triangles around */
   for (size_t e = 0; e < ne; ++e) {
     const size_t *cn = m->conn + e * np;
@@ -206,6 +239,9 @@ hoc_status hoc_opt_setup(hoc_opt *o, hoc_mesh *m, hoc_measure measure, int fix_c
   return hoc_opt_frames_setup(o);
 }
 
+/* Nodes of one CAD evaluation call in hoc_opt_eval_all. */
+enum { EVAL_PIECE = 1024 };
+
 /* Derivatives dx/dz of every free node and the normals of every slot. */
 hoc_status hoc_opt_eval_all(hoc_opt *o) {
   hoc_mesh *m = o->m;
@@ -215,10 +251,8 @@ hoc_status hoc_opt_eval_all(hoc_opt *o) {
   int nf = o->model->n_faces, nc = o->model->n_curves;
   size_t *start = hoc_calloc((size_t)(nf + nc) + 1, sizeof *start);
   size_t *order = hoc_calloc(nn + 1, sizeof *order);
-  double *par = hoc_calloc(2 * nn + 2, sizeof *par), *a = hoc_calloc(3 * nn + 3, sizeof *a),
-         *b = hoc_calloc(3 * nn + 3, sizeof *b);
   hoc_status status = HOC_OK;
-  if (!start || !order || !par || !a || !b) {
+  if (!start || !order) {
     status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
     goto done;
   }
@@ -235,40 +269,46 @@ hoc_status hoc_opt_eval_all(hoc_opt *o) {
   }
   hoc_opt_csr_restore((size_t)(nf + nc), start);
   size_t *piece = NULL, n_pieces = 0;
-  HOC_TRY_GOTO(hoc_split_groups(start, nf + nc, 1024, &piece, &n_pieces), done);
+  HOC_TRY_GOTO(hoc_split_groups(start, nf + nc, EVAL_PIECE, &piece, &n_pieces), done);
   hoc_par_error err = {0};
-#pragma omp parallel for schedule(dynamic, 1) if (o->model->thread_safe)
-  for (size_t c = 0; c < n_pieces; ++c) {
-    int g = (int)piece[2 * c];
-    size_t first = piece[2 * c + 1], n = start[g + 1] - first < 1024 ? start[g + 1] - first : 1024;
-    const size_t *nodes = order + first;
-    /* this piece's part of the work arrays */
-    double *pp = par + 2 * first, *pa = a + 3 * first, *pb = b + 3 * first;
-    hoc_status st;
-    if (g < nf) {
-      for (size_t k = 0; k < n; ++k)
-        memcpy(pp + 2 * k, m->param + 2 * nodes[k], 2 * sizeof *pp);
-      st = hoc_cad_face_eval(o->model, g, n, pp, NULL, pa, pb);
-    } else {
-      for (size_t k = 0; k < n; ++k)
-        pp[k] = m->param[2 * nodes[k]];
-      st = hoc_cad_curve_eval(o->model, g - nf, n, pp, NULL, pa);
-      memset(pb, 0, 3 * n * sizeof *pb);
+#pragma omp parallel if (o->model->thread_safe)
+  {
+    /* each thread's work arrays for one piece (not the whole mesh's: at
+     * high orders they would be a large share of the optimiser's memory) */
+    double *pp = malloc(8 * EVAL_PIECE * sizeof *pp), *pa = pp ? pp + 2 * EVAL_PIECE : NULL,
+           *pb = pp ? pp + 5 * EVAL_PIECE : NULL;
+    if (!pp) hoc_par_error_catch(&err, HOC_ERROR(HOC_ERR_MEMORY, "out of memory"));
+#pragma omp for schedule(dynamic, 1)
+    for (size_t c = 0; c < n_pieces; ++c) {
+      if (!pp) continue;
+      int g = (int)piece[2 * c];
+      size_t first = piece[2 * c + 1],
+             n = start[g + 1] - first < EVAL_PIECE ? start[g + 1] - first : EVAL_PIECE;
+      const size_t *nodes = order + first;
+      hoc_status st;
+      if (g < nf) {
+        for (size_t k = 0; k < n; ++k)
+          memcpy(pp + 2 * k, m->param + 2 * nodes[k], 2 * sizeof *pp);
+        st = hoc_cad_face_eval(o->model, g, n, pp, NULL, pa, pb);
+      } else {
+        for (size_t k = 0; k < n; ++k)
+          pp[k] = m->param[2 * nodes[k]];
+        st = hoc_cad_curve_eval(o->model, g - nf, n, pp, NULL, pa);
+        memset(pb, 0, 3 * n * sizeof *pb);
+      }
+      hoc_par_error_catch(&err, st);
+      for (size_t k = 0; k < n && st == HOC_OK; ++k) {
+        memcpy(o->node.dz + 6 * nodes[k], pa + 3 * k, 3 * sizeof *pa);
+        memcpy(o->node.dz + 6 * nodes[k] + 3, pb + 3 * k, 3 * sizeof *pb);
+      }
     }
-    hoc_par_error_catch(&err, st);
-    for (size_t k = 0; k < n && st == HOC_OK; ++k) {
-      memcpy(o->node.dz + 6 * nodes[k], pa + 3 * k, 3 * sizeof *pa);
-      memcpy(o->node.dz + 6 * nodes[k] + 3, pb + 3 * k, 3 * sizeof *pb);
-    }
+    free(pp);
   }
   free(piece);
   status = hoc_par_error_raise(&err);
 done:
   free(start);
   free(order);
-  free(par);
-  free(a);
-  free(b);
   return status;
 }
 

@@ -219,11 +219,88 @@ static int near_fold(const hoc_opt *o, size_t b) {
   return 0;
 }
 
+/* The line search of blocks list[0..nt) of a colour, whose trials hold
+ * n_eval nodes: accepted blocks are committed and appended to
+ * o->trial.committed (*n_committed), *moved counts their nodes. */
+static hoc_status line_search(hoc_opt *o, size_t *list, size_t nt, size_t n_eval,
+                              hoc_opt_scratch *scr, int nthreads, size_t *n_committed,
+                              size_t *moved) {
+  hoc_mesh *m = o->m;
+  size_t *elist = hoc_calloc(n_eval + 1, sizeof *elist);
+  HOC_CHECK(elist, HOC_ERR_MEMORY, "out of memory");
+  hoc_status status = HOC_OK;
+  for (int attempt = 0; attempt < HOC_OPT_LINE_SEARCH_TRIES && nt; ++attempt) {
+    size_t ne_list = 0;
+    for (size_t a = 0; a < nt; ++a) {
+      size_t b = list[a];
+      for (size_t c = o->B->bn_start[b]; c < o->B->bn_start[b + 1]; ++c)
+        elist[ne_list++] = o->B->bn_node[c];
+      for (size_t j = o->B->carry_start[b]; j < o->B->carry_start[b + 1]; ++j)
+        elist[ne_list++] = o->B->carry_node[j];
+    }
+    HOC_TRY_GOTO(hoc_opt_trial_reserve(o, elist, ne_list), end);
+    for (size_t a = 0; a < nt; ++a) {
+      size_t b = list[a];
+      for (int tries = 0; tries < HOC_OPT_RANGE_HALVINGS && !hoc_opt_set_trial_params(o, b);
+           ++tries)
+        o->trial.alpha[hoc_opt_tb(o, b)] *= HOC_OPT_BACKTRACK;
+    }
+    HOC_TRY_GOTO(hoc_opt_eval_trials(o, elist, ne_list, nthreads), end);
+#pragma omp parallel for schedule(dynamic, 8) num_threads(nthreads)
+    for (size_t a = 0; a < nt; ++a) {
+      size_t b = list[a], tb = hoc_opt_tb(o, b);
+      hoc_opt_scratch *s = &scr[omp_get_thread_num()];
+      double f;
+      int ok = block_trial(
+          o, b, s, o->trial.f0[tb] + HOC_OPT_ARMIJO * o->trial.alpha[tb] * o->trial.slope[tb], &f);
+      if (ok) {
+        for (size_t c = o->B->bn_start[b]; c < o->B->bn_start[b + 1]; ++c)
+          hoc_opt_commit(o, o->B->bn_node[c]);
+        for (size_t j = o->B->carry_start[b]; j < o->B->carry_start[b + 1]; ++j)
+          hoc_opt_commit(o, o->B->carry_node[j]);
+        o->trial.fnew[tb] = f;
+        o->trial.state[tb] = 2;
+      } else {
+        o->trial.alpha[tb] *= HOC_OPT_BACKTRACK;
+      }
+    }
+    size_t keep = 0;
+    for (size_t a = 0; a < nt; ++a) {
+      size_t b = list[a], tb = hoc_opt_tb(o, b);
+      if (o->trial.state[tb] != 2) {
+        list[keep++] = b;
+        continue;
+      }
+      o->trial.state[tb] = 0;
+      o->trial.committed[(*n_committed)++] = b;
+      size_t nodes = o->B->bn_start[b + 1] - o->B->bn_start[b];
+      *moved += nodes;
+      /* only a significant move wakes the neighbourhood (small ones would
+       * spread waves of smaller ones through the whole mesh) */
+      double factor = o->cfg.wake_factor;
+      if (o->cfg.wake_near_only && !near_fold(o, b)) factor = HOC_OPT_WAKE_SMOOTHING;
+      if (o->trial.f0[tb] - o->trial.fnew[tb] < factor * o->cfg.min_gain * (double)nodes &&
+          !near_tangled(o, b))
+        continue;
+      /* wake every node of the elements it touches (itself included) */
+      for (size_t c = o->B->be_start[b]; c < o->B->be_start[b + 1]; ++c) {
+        const size_t *cn = m->conn + o->B->be_elem[c] * (size_t)o->np;
+        for (int i = 0; i < o->np; ++i)
+          hoc_opt_wake_node(o, cn[i]);
+      }
+    }
+    nt = keep;
+  }
+  for (size_t a = 0; a < nt; ++a) o->trial.state[hoc_opt_tb(o, list[a])] = 0; /* gave up: asleep */
+end:
+  free(elist);
+  return status;
+}
+
 /* One colour: a Gauss-Newton step per active block, then a common
  * backtracking line search. *moved counts the nodes moved. */
 hoc_status hoc_opt_do_color(hoc_opt *o, int color, hoc_opt_scratch *scr, int nthreads,
                             size_t *moved) {
-  hoc_mesh *m = o->m;
   size_t n = hoc_opt_select_active(o, color);
   *moved = 0;
   if (!n) return HOC_OK;
@@ -237,9 +314,10 @@ hoc_status hoc_opt_do_color(hoc_opt *o, int color, hoc_opt_scratch *scr, int nth
     int nd = (int)(o->B->bd_start[b + 1] - o->B->bd_start[b]);
     double f;
     hoc_opt_block_model(o, b, s, &f, s->g, s->H);
-    o->trial.f0[b] = f;
-    o->trial.state[b] = 0;
-    double *st = o->trial.step + o->B->bd_start[b];
+    size_t tb = hoc_opt_tb(o, b);
+    o->trial.f0[tb] = f;
+    o->trial.state[tb] = 0;
+    double *st = hoc_opt_step_of(o, b);
     if (!damped_solve(nd, s->H, s->g, s->L, st)) continue;
     double slope = 0;
     for (int c = 0; c < nd; ++c) slope += s->g[c] * st[c];
@@ -256,81 +334,31 @@ hoc_status hoc_opt_do_color(hoc_opt *o, int color, hoc_opt_scratch *scr, int nth
     }
     if (len_max > HOC_OPT_STEP_CAP) alpha = HOC_OPT_STEP_CAP / len_max;
     if (!(slope < 0) || !isfinite(slope) || !(len_max * alpha > HOC_OPT_STEP_MIN)) continue;
-    o->trial.slope[b] = slope;
-    o->trial.alpha[b] = alpha;
-    o->trial.state[b] = 1;
+    o->trial.slope[tb] = slope;
+    o->trial.alpha[tb] = alpha;
+    o->trial.state[tb] = 1;
   }
   size_t nt = 0;
   for (size_t a = 0; a < n; ++a)
-    if (o->trial.state[list[a]] == 1) list[nt++] = list[a];
-  size_t n_eval = 0;
-  for (size_t a = 0; a < nt; ++a) {
-    size_t b = list[a];
-    n_eval +=
-        o->B->bn_start[b + 1] - o->B->bn_start[b] + o->B->carry_start[b + 1] - o->B->carry_start[b];
-  }
-  size_t *elist = hoc_calloc(n_eval + 1, sizeof *elist), n_committed = 0;
-  HOC_CHECK(elist, HOC_ERR_MEMORY, "out of memory");
+    if (o->trial.state[hoc_opt_tb(o, list[a])] == 1) list[nt++] = list[a];
+  /* the line search in parts whose trials hold at most HOC_OPT_TRIAL_NODES
+   * nodes (the blocks of a colour share no element: their line searches
+   * are independent, and the parts give the result of one) */
+  size_t n_committed = 0;
   hoc_status status = HOC_OK;
-  for (int attempt = 0; attempt < HOC_OPT_LINE_SEARCH_TRIES && nt; ++attempt) {
-    size_t ne_list = 0;
-    for (size_t a = 0; a < nt; ++a) {
-      size_t b = list[a];
-      for (int tries = 0; tries < HOC_OPT_RANGE_HALVINGS && !hoc_opt_set_trial_params(o, b);
-           ++tries)
-        o->trial.alpha[b] *= HOC_OPT_BACKTRACK;
-      for (size_t c = o->B->bn_start[b]; c < o->B->bn_start[b + 1]; ++c)
-        elist[ne_list++] = o->B->bn_node[c];
-      for (size_t j = o->B->carry_start[b]; j < o->B->carry_start[b + 1]; ++j)
-        elist[ne_list++] = o->B->carry_node[j];
+  for (size_t c0 = 0; c0 < nt && status == HOC_OK;) {
+    size_t c1 = c0, n_eval = 0;
+    for (; c1 < nt; ++c1) {
+      size_t b = list[c1];
+      size_t k =
+          o->B->bn_start[b + 1] - o->B->bn_start[b] + o->B->carry_start[b + 1] - o->B->carry_start[b];
+      if (c1 > c0 && n_eval + k > HOC_OPT_TRIAL_NODES) break;
+      n_eval += k;
     }
-    HOC_TRY_GOTO(hoc_opt_eval_trials(o, elist, ne_list, nthreads), done);
-#pragma omp parallel for schedule(dynamic, 8) num_threads(nthreads)
-    for (size_t a = 0; a < nt; ++a) {
-      size_t b = list[a];
-      hoc_opt_scratch *s = &scr[omp_get_thread_num()];
-      double f;
-      int ok = block_trial(
-          o, b, s, o->trial.f0[b] + HOC_OPT_ARMIJO * o->trial.alpha[b] * o->trial.slope[b], &f);
-      if (ok) {
-        for (size_t c = o->B->bn_start[b]; c < o->B->bn_start[b + 1]; ++c)
-          hoc_opt_commit(o, o->B->bn_node[c]);
-        for (size_t j = o->B->carry_start[b]; j < o->B->carry_start[b + 1]; ++j)
-          hoc_opt_commit(o, o->B->carry_node[j]);
-        o->trial.fnew[b] = f;
-        o->trial.state[b] = 2;
-      } else {
-        o->trial.alpha[b] *= HOC_OPT_BACKTRACK;
-      }
-    }
-    size_t keep = 0;
-    for (size_t a = 0; a < nt; ++a) {
-      size_t b = list[a];
-      if (o->trial.state[b] != 2) {
-        list[keep++] = b;
-        continue;
-      }
-      o->trial.state[b] = 0;
-      o->trial.committed[n_committed++] = b;
-      size_t nodes = o->B->bn_start[b + 1] - o->B->bn_start[b];
-      *moved += nodes;
-      /* only a significant move wakes the neighbourhood (small ones would
-       * spread waves of smaller ones through the whole mesh) */
-      double factor = o->cfg.wake_factor;
-      if (o->cfg.wake_near_only && !near_fold(o, b)) factor = HOC_OPT_WAKE_SMOOTHING;
-      if (o->trial.f0[b] - o->trial.fnew[b] < factor * o->cfg.min_gain * (double)nodes &&
-          !near_tangled(o, b))
-        continue;
-      /* wake every node of the elements it touches (itself included) */
-      for (size_t c = o->B->be_start[b]; c < o->B->be_start[b + 1]; ++c) {
-        const size_t *cn = m->conn + o->B->be_elem[c] * (size_t)o->np;
-        for (int i = 0; i < o->np; ++i)
-          hoc_opt_wake_node(o, cn[i]);
-      }
-    }
-    nt = keep;
+    status = line_search(o, list + c0, c1 - c0, n_eval, scr, nthreads, &n_committed, moved);
+    c0 = c1;
   }
-  for (size_t a = 0; a < nt; ++a) o->trial.state[list[a]] = 0; /* gave up: asleep */
+  if (status != HOC_OK) return status;
     /* validity may have been gained where blocks moved */
 #pragma omp parallel for schedule(dynamic, 8) num_threads(nthreads)
   for (size_t a = 0; a < n_committed; ++a) {
@@ -348,9 +376,7 @@ hoc_status hoc_opt_do_color(hoc_opt *o, int color, hoc_opt_scratch *scr, int nth
       if (!o->el.pvalid[e]) o->el.pvalid[e] = (unsigned char)hoc_opt_param_valid(o, e, s->uv);
     }
   }
-done:
-  free(elist);
-  return status;
+  return HOC_OK;
 }
 
 hoc_status hoc_opt_scratch_alloc(const hoc_opt *o, int nthreads, hoc_opt_scratch **out) {

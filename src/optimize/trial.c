@@ -39,6 +39,45 @@ static hoc_status face_normal(const hoc_opt *o, int f, const double *uv, const d
   return HOC_OK;
 }
 
+/* *p reallocated to `want` items of `size` bytes; 0 when out of memory. */
+static int grow(void **p, size_t want, size_t size) {
+  void *q = hoc_realloc(*p, want, size);
+  if (!q) return 0;
+  *p = q;
+  return 1;
+}
+
+hoc_status hoc_opt_trial_reserve(hoc_opt *o, const size_t *nodes, size_t n) {
+  hoc_opt_trial *t = &o->trial;
+  size_t slots = 0;
+  for (size_t a = 0; a < n; ++a)
+    slots += o->adj.ns_start[nodes[a] + 1] - o->adj.ns_start[nodes[a]];
+  if (n > t->cap) {
+    size_t cap = n; /* (exactly: every block is awake in the first sweep, whose colours set it) */
+    HOC_CHECK(grow((void **)&t->tpar, 2 * cap, sizeof *t->tpar) &&
+                  grow((void **)&t->txyz, 3 * cap, sizeof *t->txyz) &&
+                  grow((void **)&t->tdz, 6 * cap, sizeof *t->tdz) &&
+                  grow((void **)&t->tsbase, cap, sizeof *t->tsbase),
+              HOC_ERR_MEMORY, "out of memory for the optimiser's trial state");
+    t->cap = cap;
+  }
+  if (slots > t->scap) {
+    size_t cap = slots;
+    HOC_CHECK(grow((void **)&t->tslot_uv, 2 * cap, sizeof *t->tslot_uv) &&
+                  grow((void **)&t->tnormal, 3 * cap, sizeof *t->tnormal),
+              HOC_ERR_MEMORY, "out of memory for the optimiser's trial state");
+    t->scap = cap;
+  }
+  slots = 0;
+  for (size_t a = 0; a < n; ++a) {
+    size_t k = nodes[a];
+    t->tix[k] = (uint32_t)a;
+    t->tsbase[a] = slots;
+    slots += o->adj.ns_start[k + 1] - o->adj.ns_start[k];
+  }
+  return HOC_OK;
+}
+
 /* Parameters of node k's slot s for the trial: (u,v) of the slot, unwrapped
  * near the element's current value. */
 void hoc_opt_trial_elem_uv(const hoc_opt *o, size_t k, size_t e, int kk, double *uv) {
@@ -46,13 +85,15 @@ void hoc_opt_trial_elem_uv(const hoc_opt *o, size_t k, size_t e, int kk, double 
   const double *cur = m->elem_uv + 2 * (e * (size_t)o->np + (size_t)kk);
   if (m->dim[k] == HOC_ON_FACE) {
     /* the same displacement as the node's parameters */
-    uv[0] = cur[0] + (o->trial.tpar[2 * k] - m->param[2 * k]);
-    uv[1] = cur[1] + (o->trial.tpar[2 * k + 1] - m->param[2 * k + 1]);
+    const double *tp = hoc_opt_tpar(o, k);
+    uv[0] = cur[0] + (tp[0] - m->param[2 * k]);
+    uv[1] = cur[1] + (tp[1] - m->param[2 * k + 1]);
     return;
   }
   size_t s = m->elem_slot[e * (size_t)o->np + (size_t)kk];
-  uv[0] = o->trial.tslot_uv[2 * s];
-  uv[1] = o->trial.tslot_uv[2 * s + 1];
+  const double *ts = o->trial.tslot_uv + 2 * hoc_opt_tslot(o, k, s);
+  uv[0] = ts[0];
+  uv[1] = ts[1];
   hoc_cad_face_unwrap_near(&o->model->faces[m->elem_face[e]], cur, uv);
 }
 
@@ -69,34 +110,36 @@ static int param_ok(double cur, double v, double lo, double hi) {
  * and the nodes it carries. Returns 0 if one leaves a non-closed range. */
 int hoc_opt_set_trial_params(hoc_opt *o, size_t b) {
   const hoc_mesh *m = o->m;
-  const double *st = o->trial.step + o->B->bd_start[b];
-  double al = o->trial.alpha[b];
+  const double *st = hoc_opt_step_of(o, b);
+  double al = o->trial.alpha[hoc_opt_tb(o, b)];
   int inside = 1;
   for (size_t a = o->B->bn_start[b]; a < o->B->bn_start[b + 1]; ++a) {
     size_t k = o->B->bn_node[a];
     int off = o->B->node_off[k];
+    double *tp = hoc_opt_tpar(o, k);
     if (m->dim[k] == HOC_ON_FACE) {
       const hoc_cad_face *f = &o->model->faces[m->entity[k]];
       for (int d = 0; d < 2; ++d) {
         double v = m->param[2 * k + d] + al * st[off + d];
-        o->trial.tpar[2 * k + d] = v;
+        tp[d] = v;
         if (!(f->period[d] > 0) && !param_ok(m->param[2 * k + d], v, f->lo[d], f->hi[d]))
           inside = 0;
       }
     } else {
       const hoc_cad_curve *c = &o->model->curves[m->entity[k]];
       double v = m->param[2 * k] + al * st[off];
-      o->trial.tpar[2 * k] = v;
-      o->trial.tpar[2 * k + 1] = 0;
+      tp[0] = v;
+      tp[1] = 0;
       if (!(c->period > 0) && !param_ok(m->param[2 * k], v, c->lo, c->hi)) inside = 0;
     }
   }
   for (size_t j = o->B->carry_start[b]; j < o->B->carry_start[b + 1]; ++j) {
     size_t c = o->B->carry_node[j];
     const hoc_cad_face *f = &o->model->faces[m->entity[c]];
+    double *tp = hoc_opt_tpar(o, c);
     for (int d = 0; d < 2; ++d) {
-      double v = m->param[2 * c + d] + al * o->B->carry_w[j] * st[d];
-      o->trial.tpar[2 * c + d] = v;
+      double v = m->param[2 * c + d] + al * hoc_opt_carry_w(o, j) * st[d];
+      tp[d] = v;
       if (!(f->period[d] > 0) && !param_ok(m->param[2 * c + d], v, f->lo[d], f->hi[d])) inside = 0;
     }
   }
@@ -109,33 +152,31 @@ hoc_status hoc_opt_eval_trial(hoc_opt *o, size_t i) {
   hoc_mesh *m = o->m;
   const hoc_model *model = o->model;
   int ent = m->entity[i];
+  double *tp = hoc_opt_tpar(o, i), *tx = hoc_opt_txyz(o, i), *tz = hoc_opt_tdz(o, i);
+  size_t ts = o->trial.tsbase[o->trial.tix[i]]; /* the node's first trial slot */
   if (m->dim[i] == HOC_ON_FACE) {
-    HOC_TRY(hoc_cad_face_eval(model, ent, 1, o->trial.tpar + 2 * i, o->trial.txyz + 3 * i,
-                              o->trial.tdz + 6 * i, o->trial.tdz + 6 * i + 3));
-    size_t s = o->adj.ns_slot[o->adj.ns_start[i]];
-    o->trial.tslot_uv[2 * s] = o->trial.tpar[2 * i];
-    o->trial.tslot_uv[2 * s + 1] = o->trial.tpar[2 * i + 1];
-    HOC_TRY(face_normal(o, ent, o->trial.tpar + 2 * i, o->trial.tdz + 6 * i,
-                        o->trial.tdz + 6 * i + 3, o->trial.tnormal + 3 * s));
+    HOC_TRY(hoc_cad_face_eval(model, ent, 1, tp, tx, tz, tz + 3));
+    o->trial.tslot_uv[2 * ts] = tp[0];
+    o->trial.tslot_uv[2 * ts + 1] = tp[1];
+    HOC_TRY(face_normal(o, ent, tp, tz, tz + 3, o->trial.tnormal + 3 * ts));
   } else {
-    HOC_TRY(hoc_cad_curve_eval(model, ent, 1, o->trial.tpar + 2 * i, o->trial.txyz + 3 * i,
-                               o->trial.tdz + 6 * i));
-    o->trial.tdz[6 * i + 3] = o->trial.tdz[6 * i + 4] = o->trial.tdz[6 * i + 5] = 0;
+    HOC_TRY(hoc_cad_curve_eval(model, ent, 1, tp, tx, tz));
+    tz[3] = tz[4] = tz[5] = 0;
     for (size_t j = o->adj.ns_start[i]; j < o->adj.ns_start[i + 1]; ++j) {
-      size_t s = o->adj.ns_slot[j];
+      size_t s = o->adj.ns_slot[j], t = ts + (j - o->adj.ns_start[i]);
       int f = m->slot_face[s];
       double uv[2], du[3], dv[3];
-      HOC_TRY(hoc_cad_curve_to_face(model, ent, f, 1, o->trial.tpar + 2 * i, uv));
+      HOC_TRY(hoc_cad_curve_to_face(model, ent, f, 1, tp, uv));
       hoc_cad_face_unwrap_near(&model->faces[f], m->slot_uv + 2 * s, uv);
       HOC_TRY(hoc_cad_face_eval(model, f, 1, uv, NULL, du, dv));
-      o->trial.tslot_uv[2 * s] = uv[0];
-      o->trial.tslot_uv[2 * s + 1] = uv[1];
-      HOC_TRY(face_normal(o, f, uv, du, dv, o->trial.tnormal + 3 * s));
+      o->trial.tslot_uv[2 * t] = uv[0];
+      o->trial.tslot_uv[2 * t + 1] = uv[1];
+      HOC_TRY(face_normal(o, f, uv, du, dv, o->trial.tnormal + 3 * t));
       /* a small move cannot turn the surface over: where the CAD normal
        * flips (a folded parametrisation at the boundary, see
        * hoc_mesh_slot_normals) the slot keeps its orientation */
       const double *old = o->node.normal + 3 * s;
-      double *nw = o->trial.tnormal + 3 * s;
+      double *nw = o->trial.tnormal + 3 * t;
       if (nw[0] * old[0] + nw[1] * old[1] + nw[2] * old[2] < 0)
         for (int d = 0; d < 3; ++d)
           nw[d] = -nw[d];
@@ -172,7 +213,7 @@ int hoc_opt_line_monotone(const hoc_opt *o, size_t l) {
     if (m->dim[i] != HOC_ON_CURVE) {
       t = j == 0 ? ta : tb; /* a vertex end: the line's own parameter */
     } else {
-      t = o->node.moving[i] ? o->trial.tpar[2 * i] : m->param[2 * i];
+      t = o->node.moving[i] ? hoc_opt_tpar(o, i)[0] : m->param[2 * i];
       if (c->period > 0) {
         double guess = ta + (tb - ta) * j / p;
         t -= c->period * floor((t - guess) / c->period + 0.5);
@@ -204,18 +245,19 @@ void hoc_opt_commit(hoc_opt *o, size_t k) {
       const size_t *ln = m->line_conn + l * (size_t)(m->order + 1);
       for (int end = 0; end < 2; ++end) {
         if (ln[end] != k) continue;
-        double t = o->trial.tpar[2 * k], old = m->line_t[2 * l + end];
+        double t = hoc_opt_tpar(o, k)[0], old = m->line_t[2 * l + end];
         if (c->period > 0) t -= c->period * floor((t - old) / c->period + 0.5);
         m->line_t[2 * l + end] = t;
       }
     }
   }
+  size_t ts = o->trial.tsbase[o->trial.tix[k]];
   for (size_t j = o->adj.ns_start[k]; j < o->adj.ns_start[k + 1]; ++j) {
-    size_t s = o->adj.ns_slot[j];
-    memcpy(m->slot_uv + 2 * s, o->trial.tslot_uv + 2 * s, 2 * sizeof(double));
-    memcpy(o->node.normal + 3 * s, o->trial.tnormal + 3 * s, 3 * sizeof(double));
+    size_t s = o->adj.ns_slot[j], t = ts + (j - o->adj.ns_start[k]);
+    memcpy(m->slot_uv + 2 * s, o->trial.tslot_uv + 2 * t, 2 * sizeof(double));
+    memcpy(o->node.normal + 3 * s, o->trial.tnormal + 3 * t, 3 * sizeof(double));
   }
-  double p[2] = {o->trial.tpar[2 * k], o->trial.tpar[2 * k + 1]};
+  double p[2] = {hoc_opt_tpar(o, k)[0], hoc_opt_tpar(o, k)[1]};
   if (m->dim[k] == HOC_ON_FACE) {
     hoc_cad_face_wrap(&o->model->faces[m->entity[k]], p);
     /* the slot keeps the wrapped value too (elements hold unwrapped copies) */
@@ -227,6 +269,6 @@ void hoc_opt_commit(hoc_opt *o, size_t k) {
   }
   m->param[2 * k] = p[0];
   m->param[2 * k + 1] = p[1];
-  memcpy(m->xyz + 3 * k, o->trial.txyz + 3 * k, 3 * sizeof(double));
-  memcpy(o->node.dz + 6 * k, o->trial.tdz + 6 * k, 6 * sizeof(double));
+  memcpy(m->xyz + 3 * k, hoc_opt_txyz(o, k), 3 * sizeof(double));
+  memcpy(o->node.dz + 6 * k, hoc_opt_tdz(o, k), 6 * sizeof(double));
 }

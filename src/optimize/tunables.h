@@ -171,6 +171,14 @@
  * elements at order 3: 462 MB without, 1 156 MB with). */
 #define HOC_OPT_FRAME_MIN_ORDER 6
 
+/* Nodes whose trial state a colour's line search holds at once: a colour
+ * of large blocks (the interiors of every element) holds most nodes of
+ * the mesh (nist_ftc_07 at order 10: 4 million, 560 MB of trial state).
+ * Its blocks share no element, so their line searches are independent and
+ * run in parts of this many nodes with the same result; a part of 2^18
+ * nodes (35 MB) still gives the threads thousands of blocks. */
+#define HOC_OPT_TRIAL_NODES ((size_t)1 << 18)
+
 /* Polish ----------------------------------------------------------------- */
 
 /* The polish is a search for the last few folds: with more tangled
