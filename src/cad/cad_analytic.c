@@ -230,7 +230,8 @@ hoc_status hoc_cad_create_analytic(hoc_analytic_kind kind, double a, double b,
   for (int i = 0; i < nv; ++i) m->vertices[i].tag = i + 1;
   switch (kind) {
   case HOC_ANALYTIC_PLANE:
-    snprintf(f->type, sizeof f->type, "Plane");
+  case HOC_ANALYTIC_FOLD:
+    snprintf(f->type, sizeof f->type, kind == HOC_ANALYTIC_PLANE ? "Plane" : "Folded square");
     f->lo[0] = f->lo[1] = 0;
     f->hi[0] = f->hi[1] = a;
     set_curve(m, 0, 0, a, 0, 1, s, 0, 0, 1, 0);  /* v = 0 */
@@ -242,22 +243,10 @@ hoc_status hoc_cad_create_analytic(hoc_analytic_kind kind, double a, double b,
     face_point(s, a, a, m->vertices[2].xyz, NULL, NULL);
     face_point(s, 0, a, m->vertices[3].xyz, NULL, NULL);
     m->bbox[3] = m->bbox[4] = a;
-    break;
-  case HOC_ANALYTIC_FOLD:
-    snprintf(f->type, sizeof f->type, "Folded square");
-    f->lo[0] = f->lo[1] = 0;
-    f->hi[0] = f->hi[1] = a;
-    set_curve(m, 0, 0, a, 0, 1, s, 0, 0, 1, 0); /* v = 0 */
-    set_curve(m, 1, 0, a, 1, 2, s, a, 0, 0, 1); /* u = a */
-    set_curve(m, 2, 0, a, 3, 2, s, 0, a, 1, 0); /* v = a */
-    set_curve(m, 3, 0, a, 0, 3, s, 0, 0, 0, 1); /* u = 0 */
-    face_point(s, 0, 0, m->vertices[0].xyz, NULL, NULL);
-    face_point(s, a, 0, m->vertices[1].xyz, NULL, NULL);
-    face_point(s, a, a, m->vertices[2].xyz, NULL, NULL);
-    face_point(s, 0, a, m->vertices[3].xyz, NULL, NULL);
-    m->bbox[0] = 0, m->bbox[3] = a;
-    m->bbox[1] = 0, m->bbox[4] = fmax(b * b, (a - b) * (a - b));
-    m->bbox[2] = -b * b * b, m->bbox[5] = (a - b) * (a - b) * (a - b);
+    if (kind == HOC_ANALYTIC_FOLD) { /* x = u, y = w^2, z = w^3 with w in [-b, a - b] */
+      m->bbox[4] = fmax(b * b, (a - b) * (a - b));
+      m->bbox[2] = -b * b * b, m->bbox[5] = (a - b) * (a - b) * (a - b);
+    }
     break;
   case HOC_ANALYTIC_SPHERE:
     snprintf(f->type, sizeof f->type, "Sphere");
