@@ -182,9 +182,10 @@ static hoc_status find_tangled(hoc_report *report, const hoc_mesh *mesh, const d
     int folds = 0;
     if (q[e] == 0.0 && hoc_mesh_element_folds(mesh, e, &folds) == HOC_OK) across += folds;
   }
+  int all_across = opt && across == total; /* optimised, and every one across a fold */
   text t = {0};
   const hoc_stage *s = opt ? &opt->stage : NULL;
-  if (across == total)
+  if (all_across)
     text_add(&t,
              "%zu element(s) tangled across a fold of their face, where its normal phi_u x "
              "phi_v reverses (the CAD face folds on itself): no mesh of the face untangles "
@@ -212,7 +213,7 @@ static hoc_status find_tangled(hoc_report *report, const hoc_mesh *mesh, const d
       ++shown;
     }
   text_add(&t, "%s", total > shown ? " ..." : "");
-  if (across && across < total)
+  if (across && !all_across)
     text_add(&t,
              "; %zu of them cross a fold of their face, where its normal phi_u x phi_v "
              "reverses, which every mesh of that face crosses",
