@@ -267,13 +267,7 @@ static hoc_status mesh_model_run(const hoc_run *run, hoc_model *model, model_mes
     if (!o->optimize || o->order < 2 || !hoc_stages_last(r)->stage.stats.tangled ||
         o->refinements < 1)
       break;
-    /* tangled elements that each cross a fold of their face: no split or
-     * finer mesh untangles them (hoc_repair_tangled_on_folds) */
-    int spent = o->linear || r->remeshings >= o->refinements, across_folds = 0;
-    size_t each_across = 0;
-    if (!spent)
-      HOC_TRY_GOTO(hoc_repair_tangled_on_folds(run, m->ho, &across_folds, &each_across), done);
-    if (spent || each_across) {
+    if (o->linear || r->remeshings >= o->refinements) {
       size_t now_tangled = hoc_stages_last(r)->stage.stats.tangled;
       if (m->kept_ho && hoc_stages_last(&kept_r)->stage.stats.tangled < now_tangled) {
         int made = r->refinements, remade = r->remeshings;
@@ -287,15 +281,8 @@ static hoc_status mesh_model_run(const hoc_run *run, hoc_model *model, model_mes
         *r = kept_r;
         r->refinements = made;
         r->remeshings = remade;
-        each_across = 0; /* the kept mesh's elements are split as once remeshing is spent */
       }
-      status = each_across
-                   ? hoc_run_event(run, HOC_EVENT_NOTE,
-                                   "the %zu tangled element(s) each cross a fold of their face, "
-                                   "where its normal reverses: no split or finer mesh untangles "
-                                   "them, so none is tried",
-                                   each_across)
-                   : hoc_repair_refine_tangled(run, r, 2, &m->ho, NULL, 0);
+      status = hoc_repair_refine_tangled(run, r, 2, &m->ho, NULL, 0);
       *final = m->ho;
       break;
     }
@@ -303,7 +290,8 @@ static hoc_status mesh_model_run(const hoc_run *run, hoc_model *model, model_mes
      * (as below, once remeshing is spent) keeps the rest of the mesh; it
      * is kept if it leaves none tangled (the bottle at order 2: two
      * elements at its thread's end, which two remeshings only make worse) */
-    int split_done = 0;
+    int split_done = 0, across_folds = 0;
+    HOC_TRY_GOTO(hoc_repair_tangled_on_folds(run, m->ho, &across_folds), done);
     status = hoc_repair_split_first(run, r, &m->ho, across_folds, &split_done);
     *final = m->ho;
     if (status != HOC_OK || split_done) break;

@@ -175,14 +175,8 @@ hoc_status hoc_repair_linear(const hoc_run *run, hoc_model *model, const hoc_lin
  * element of it crosses a fold: hoc_mesh_element_folds). A finer mesh of
  * such a face crosses the fold with more elements (surf114.igs: 26 linear
  * elements across folds of faces 1, 3 and 4; splitting the inverted ones
- * twice makes 148), so these faces are split, never meshed again finer.
- * *across: the number of tangled elements when each of them crosses a fold
- * itself, else 0. Such an element is tangled whatever its nodes (its
- * normal agrees with the face's on one side of the fold only), and a split
- * or a finer mesh only crosses the fold with more elements: no repair is
- * tried for them. */
-hoc_status hoc_repair_tangled_on_folds(const hoc_run *run, const hoc_mesh *mesh, int *all,
-                                       size_t *across);
+ * twice makes 148), so these faces are split, never meshed again finer. */
+hoc_status hoc_repair_tangled_on_folds(const hoc_run *run, const hoc_mesh *mesh, int *all);
 
 /* The faces of the tangled elements of ho (made from lin) get an edge
  * length bound of half their longest edge in *face_size (allocated on first

@@ -628,34 +628,27 @@ done:
   return status;
 }
 
-hoc_status hoc_repair_tangled_on_folds(const hoc_run *run, const hoc_mesh *mesh, int *all,
-                                       size_t *across) {
+hoc_status hoc_repair_tangled_on_folds(const hoc_run *run, const hoc_mesh *mesh, int *all) {
   *all = 0;
-  *across = 0;
-  size_t ne = hoc_mesh_num_elements(mesh), n_tangled = 0;
+  size_t ne = hoc_mesh_num_elements(mesh);
   int nf = mesh->model->n_faces;
   unsigned char *tangled = NULL, *state = NULL; /* per face: 1 tangled, 2 and folds */
   hoc_status status = HOC_OK;
   HOC_ALLOC_GOTO(tangled, ne, done);
   HOC_ALLOC_GOTO(state, (size_t)nf + 1, done);
   HOC_TRY_GOTO(hoc_mesh_measure(mesh, run->o.measure, NULL, tangled, NULL), done);
+  int any = 0;
   for (size_t e = 0; e < ne; ++e)
-    if (tangled[e]) {
-      state[mesh->elem_face[e]] = 1;
-      ++n_tangled;
-    }
+    if (tangled[e]) any = state[mesh->elem_face[e]] = 1;
   for (size_t e = 0; e < ne; ++e) {
     int f = mesh->elem_face[e], folds = 0;
-    if (!state[f]) continue;
-    if (state[f] == 2 && !tangled[e]) continue;
+    if (state[f] != 1) continue;
     HOC_TRY_GOTO(hoc_mesh_element_folds(mesh, e, &folds), done);
     if (folds) state[f] = 2;
-    if (folds && tangled[e]) ++*across;
   }
-  *all = n_tangled > 0;
+  *all = any;
   for (int f = 0; f < nf; ++f)
     if (state[f] == 1) *all = 0;
-  if (*across < n_tangled) *across = 0;
 done:
   free(tangled);
   free(state);

@@ -188,8 +188,8 @@ static hoc_status find_tangled(hoc_report *report, const hoc_mesh *mesh, const d
   if (all_across)
     text_add(&t,
              "%zu element(s) tangled across a fold of their face, where its normal phi_u x "
-             "phi_v reverses (the CAD face folds on itself): no mesh of the face untangles "
-             "them:",
+             "phi_v reverses (the CAD face folds on itself; every mesh of the face crosses the "
+             "fold, a finer one with more elements):",
              total);
   else if (opt && !s->converged && opt->result.stopped_at_limit && s->iterations >= 10 &&
            2 * opt->result.best_iteration <= s->iterations)
