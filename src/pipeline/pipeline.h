@@ -36,14 +36,6 @@
  * tangle over 1/HOC_PIPELINE_REPLACED_SLACK more elements than the input's
  * (another mesher's placement and hocad's fold in different places). */
 #define HOC_PIPELINE_REPLACED_SLACK 10
-/* From this order on, a split of an optimised mesh is optimised locally:
- * only the nodes of the split's children and of HOC_PIPELINE_LOCAL_RINGS
- * rings of elements around them move (the rest of the mesh is where the
- * first optimisation left it), as are the poor elements of "smoothed".
- * Below it the whole mesh is optimised again, which costs little there
- * (orders 2, 3, 5 and gmsh's order-3 meshes were measured so); at order 10
- * that took as long as the first optimisation, each split. */
-#define HOC_PIPELINE_LOCAL_MIN_ORDER 6
 /* From this order on, the optimiser starts from a coarser solution: the
  * linear mesh raised to HOC_PIPELINE_COARSE_ORDER and optimised there
  * ("coarse"), then raised to the order asked ("re-raised"). A high order
@@ -54,6 +46,13 @@
  * optimisation leaves elements tangled, the direct raise is used. */
 #define HOC_PIPELINE_COARSE_FROM 6
 #define HOC_PIPELINE_COARSE_ORDER 3
+/* A split of an optimised mesh is optimised locally: only the nodes of the
+ * split's children and of HOC_PIPELINE_LOCAL_RINGS rings of elements
+ * around them move (the rest of the mesh is where the first optimisation
+ * left it), as do the poor elements of "smoothed". A whole optimisation
+ * per split repeats the first one's cost for a few elements: at order 10
+ * tens of minutes, at order 5 on repatch_hpdc (7 910 elements, two left
+ * tangled) 65 s per split against 2-10 s locally. */
 #define HOC_PIPELINE_LOCAL_RINGS 2
 
 /* gmsh's 2D algorithms (mesh/mesh.h) the faces holding linear triangles

@@ -97,9 +97,9 @@ static hoc_status split_tangled(const hoc_run *run, hoc_stages *r, int n_keep, h
   hoc_status status = HOC_OK;
   HOC_ALLOC_GOTO(tangled, ne, done);
   double t0 = hoc_pipeline_now();
-  /* from HOC_PIPELINE_LOCAL_MIN_ORDER on, a split of the optimised mesh is
-   * optimised locally: its children and the rings around them */
-  int local = !base && hoc_mesh_order(mesh) >= HOC_PIPELINE_LOCAL_MIN_ORDER;
+  /* a split of the optimised mesh is optimised locally: its children and
+   * the rings around them (HOC_PIPELINE_LOCAL_RINGS) */
+  int local = !base;
   if (local) HOC_ALLOC_GOTO(pieces, ne, done);
   HOC_TRY_GOTO(hoc_mesh_measure(mesh, run->o.measure, NULL, tangled, NULL), done);
   HOC_TRY_GOTO(hoc_mesh_split(base ? base : mesh, tangled, kind, fine, pieces), done);
