@@ -632,9 +632,9 @@ hoc_status hoc_mesh_model(hoc_model *model, const hoc_mesh_options *options, hoc
  *  chains taken in turn, red-green from the optimised result and at
  *  longest edges from the mesh it was optimised from (hoc_mesh_split),
  *  each split optimised again (a split of an optimised result only in its
- *  new elements and two rings around them), until a result has no tangled element or each
- *  chain made `refinements` splits; the result with the fewest tangled
- *  elements is kept.
+ *  new elements and two rings around them), until a result has no tangled
+ *  element or each chain made `refinements` splits; the result with the
+ *  fewest tangled elements is kept.
  *  @param[in]  in       the mesh; it is not changed
  *  @param[in]  options  NULL for defaults (order, nodeset, sizes, linear, optimize,
  *                       equispaced and keep_stages are not used)
