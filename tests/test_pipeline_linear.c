@@ -208,8 +208,8 @@ static void test_tangled_on_folds(void) {
 
 /* Elements across a fold are not beyond repair: the bottle at order 2
  * (occt_bottle.brep; its face 4 folds at the thread's end) is left with
- * elements tangled across the fold by the optimisation, and the first
- * split of the fold rule (HOC_PIPELINE_FOLD_SPLITS) untangles them all. */
+ * elements tangled across the fold by the optimisation, and the fold
+ * rule's splits (HOC_PIPELINE_FOLD_SPLITS per chain) untangle them all. */
 static void test_bottle_fold_split(void) {
   hoc_model *model = NULL;
   CHECK_OK(hoc_model_open(HOC_MODELS_DIR "/occt_bottle.brep", &model));
