@@ -152,8 +152,8 @@ hoc_status hoc_mesh_refine_bounds(const hoc_mesh *mesh, const unsigned char *ele
 
 /* Nodes grouped by entity: order[] lists node indices, start[e]..start[e+1]
  * those on entity e of dimension `dim`. */
-static hoc_status group_nodes(const hoc_mesh *m, int dim, int n_entities, size_t **start_out,
-                              size_t **order_out) {
+static hoc_status group_nodes(const hoc_mesh *m, int dim, const unsigned char *which,
+                              int n_entities, size_t **start_out, size_t **order_out) {
   size_t *start, *order;
   HOC_ALLOC(start, (size_t)n_entities + 1);
   order = hoc_calloc(m->n_nodes, sizeof *order);
@@ -162,7 +162,7 @@ static hoc_status group_nodes(const hoc_mesh *m, int dim, int n_entities, size_t
     return HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
   }
   for (size_t i = 0; i < m->n_nodes; ++i)
-    if (m->dim[i] == dim) start[m->entity[i] + 1]++;
+    if (m->dim[i] == dim && (!which || which[i])) start[m->entity[i] + 1]++;
   for (int e = 0; e < n_entities; ++e) start[e + 1] += start[e];
   size_t *fill = hoc_calloc((size_t)n_entities + 1, sizeof *fill);
   if (!fill) {
@@ -172,7 +172,7 @@ static hoc_status group_nodes(const hoc_mesh *m, int dim, int n_entities, size_t
   }
   memcpy(fill, start, ((size_t)n_entities + 1) * sizeof *fill);
   for (size_t i = 0; i < m->n_nodes; ++i)
-    if (m->dim[i] == dim) order[fill[m->entity[i]]++] = i;
+    if (m->dim[i] == dim && (!which || which[i])) order[fill[m->entity[i]]++] = i;
   free(fill);
   *start_out = start;
   *order_out = order;
@@ -289,18 +289,19 @@ hoc_status hoc_split_groups(const size_t *start, int n_groups, size_t size, size
   return HOC_OK;
 }
 
-/* Positions of the nodes of one dimension from their parameters; xyz[n][3]. */
-static hoc_status eval_nodes(const hoc_mesh *m, int dim, double *xyz) {
+/* Positions of the nodes of one dimension (those flagged in `which` if
+ * not NULL) from their parameters; xyz[n][3]. */
+static hoc_status eval_nodes(const hoc_mesh *m, int dim, const unsigned char *which, double *xyz) {
   const hoc_model *model = m->model;
   if (dim == HOC_ON_VERTEX) {
     for (size_t i = 0; i < m->n_nodes; ++i)
-      if (m->dim[i] == HOC_ON_VERTEX)
+      if (m->dim[i] == HOC_ON_VERTEX && (!which || which[i]))
         memcpy(xyz + 3 * i, model->vertices[m->entity[i]].xyz, 3 * sizeof *xyz);
     return HOC_OK;
   }
   int n_ent = dim == HOC_ON_FACE ? model->n_faces : model->n_curves;
   size_t *start = NULL, *order = NULL, *chunk = NULL, n_chunks = 0;
-  HOC_TRY(group_nodes(m, dim, n_ent, &start, &order));
+  HOC_TRY(group_nodes(m, dim, which, n_ent, &start, &order));
   hoc_status status = hoc_split_groups(start, n_ent, CHUNK, &chunk, &n_chunks);
   hoc_par_error err = {0};
   if (status == HOC_OK) {
@@ -343,7 +344,12 @@ static hoc_status eval_nodes(const hoc_mesh *m, int dim, double *xyz) {
 }
 
 hoc_status hoc_mesh_update_xyz(hoc_mesh *m) {
-  for (int dim = 0; dim <= 2; ++dim) HOC_TRY(eval_nodes(m, dim, m->xyz));
+  for (int dim = 0; dim <= 2; ++dim) HOC_TRY(eval_nodes(m, dim, NULL, m->xyz));
+  return HOC_OK;
+}
+
+hoc_status hoc_mesh_update_xyz_of(hoc_mesh *m, const unsigned char *which) {
+  for (int dim = 0; dim <= 2; ++dim) HOC_TRY(eval_nodes(m, dim, which, m->xyz));
   return HOC_OK;
 }
 
@@ -352,7 +358,7 @@ hoc_status hoc_mesh_max_cad_distance(const hoc_mesh *mesh, double *distance) {
   double *x;
   HOC_ALLOC(x, 3 * mesh->n_nodes);
   hoc_status status = HOC_OK;
-  for (int dim = 0; dim <= 2 && status == HOC_OK; ++dim) status = eval_nodes(mesh, dim, x);
+  for (int dim = 0; dim <= 2 && status == HOC_OK; ++dim) status = eval_nodes(mesh, dim, NULL, x);
   double d = 0;
   for (size_t i = 0; i < mesh->n_nodes && status == HOC_OK; ++i) {
     double dx = x[3 * i] - mesh->xyz[3 * i], dy = x[3 * i + 1] - mesh->xyz[3 * i + 1],

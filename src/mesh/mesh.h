@@ -163,6 +163,8 @@ void hoc_node_builder_free(hoc_node_builder *b);
 
 /** Evaluate node positions from parameters (all nodes). */
 hoc_status hoc_mesh_update_xyz(hoc_mesh *mesh);
+/** The same for the nodes flagged in which[n_nodes]. */
+hoc_status hoc_mesh_update_xyz_of(hoc_mesh *mesh, const unsigned char *which);
 
 /** Work split for evaluating grouped items on several threads: items
  *  start[g]..start[g+1] of each group g in pieces of at most `size`, each

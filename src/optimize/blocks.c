@@ -45,7 +45,7 @@ hoc_status hoc_opt_build_blocks(hoc_opt *o, int family) {
   size_t nn = m->n_nodes, ne = m->n_elems, np = (size_t)o->np;
   int p = m->order;
   HOC_ALLOC(B->node_block, nn);
-  HOC_ALLOC(B->node_off, nn);
+  if (family == 0) HOC_ALLOC(B->node_off, nn); /* (single nodes: offset 0) */
   for (size_t i = 0; i < nn; ++i) B->node_block[i] = HOC_OPT_NO_BLOCK;
   hoc_growlist start = {0}, nodes = {0};
   hoc_status status = HOC_OK;
@@ -115,7 +115,7 @@ hoc_status hoc_opt_build_blocks(hoc_opt *o, int family) {
   for (size_t b = 0; b < nb; ++b) {
     int off = 0;
     for (size_t a = B->bn_start[b]; a < B->bn_start[b + 1]; ++a) {
-      B->node_off[B->bn_node[a]] = off;
+      if (B->node_off) B->node_off[B->bn_node[a]] = off;
       off += o->adj.ndof[B->bn_node[a]];
     }
     B->bd_start[b + 1] = B->bd_start[b] + (uint32_t)off;
@@ -143,8 +143,8 @@ hoc_status hoc_opt_build_blocks(hoc_opt *o, int family) {
       status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
     if (status != HOC_OK) goto done;
   }
-  /* carried nodes of face-interior vertex blocks */
-  {
+  /* carried nodes of face-interior vertex blocks (single nodes carry none) */
+  if (family == 0) {
     hoc_growlist cs = {0}, cn = {0};
     uint16_t *code = NULL; /* each carried node's weight (hoc_opt_carry_w) */
     size_t ccap = 0;
@@ -235,12 +235,14 @@ hoc_status hoc_opt_build_blocks(hoc_opt *o, int family) {
       if (c + 1 > max_colors) max_colors = c + 1;
     }
     B->n_colors = max_colors;
-    if (status == HOC_OK)
-      status = hoc_opt_csr_alloc((size_t)max_colors, nb, &B->color_start, &B->color_block);
+    B->color_start = hoc_calloc((size_t)max_colors + 1, sizeof *B->color_start);
+    B->color_block = hoc_calloc(nb + 1, sizeof *B->color_block);
+    if (status == HOC_OK && (!B->color_start || !B->color_block))
+      status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
     if (status == HOC_OK) {
       for (size_t b = 0; b < nb; ++b) B->color_start[color[b] + 1]++;
       hoc_opt_csr_finish_counts((size_t)max_colors, B->color_start);
-      for (size_t b = 0; b < nb; ++b) B->color_block[B->color_start[color[b]]++] = b;
+      for (size_t b = 0; b < nb; ++b) B->color_block[B->color_start[color[b]]++] = (uint32_t)b;
       hoc_opt_csr_restore((size_t)max_colors, B->color_start);
       B->cpos = hoc_calloc(nb + 1, sizeof *B->cpos);
       B->cbd = hoc_calloc(nb + 1, sizeof *B->cbd);
@@ -281,7 +283,7 @@ done:
 }
 
 double hoc_opt_carry_weight(const hoc_opt *o, size_t b, size_t node) {
-  for (size_t j = o->B->carry_start[b]; j < o->B->carry_start[b + 1]; ++j)
+  for (size_t j = hoc_opt_carry_begin(o->B, b); j < hoc_opt_carry_end(o->B, b); ++j)
     if (o->B->carry_node[j] == node) return hoc_opt_carry_w(o, j);
   return 0;
 }
@@ -289,7 +291,7 @@ double hoc_opt_carry_weight(const hoc_opt *o, size_t b, size_t node) {
 void hoc_opt_set_moving(hoc_opt *o, size_t b, unsigned char v) {
   for (size_t a = o->B->bn_start[b]; a < o->B->bn_start[b + 1]; ++a)
     o->node.moving[o->B->bn_node[a]] = v;
-  for (size_t j = o->B->carry_start[b]; j < o->B->carry_start[b + 1]; ++j)
+  for (size_t j = hoc_opt_carry_begin(o->B, b); j < hoc_opt_carry_end(o->B, b); ++j)
     o->node.moving[o->B->carry_node[j]] = v;
 }
 

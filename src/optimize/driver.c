@@ -29,10 +29,11 @@ void hoc_optimize_options_default(hoc_optimize_options *o) {
 
 void hoc_opt_snapshot_free(hoc_opt_snapshot *s) {
   free(s->param);
-  free(s->xyz);
-  free(s->slot_uv);
-  free(s->elem_uv);
   free(s->line_t);
+  free(s->slot_uv.at);
+  free(s->slot_uv.uv);
+  free(s->elem_uv.at);
+  free(s->elem_uv.uv);
 }
 
 /* Copy src of n doubles into *dst (allocated on first use). */
@@ -43,23 +44,63 @@ static hoc_status keep(double **dst, const double *src, size_t n) {
   return HOC_OK;
 }
 
+/* uv[2] of item `at` into the list (grown as needed). */
+static hoc_status keep_uv(hoc_opt_uv_list *l, size_t at, const double *uv) {
+  if (l->n == l->cap) {
+    size_t cap = l->cap ? 2 * l->cap : 1024;
+    size_t *a = hoc_realloc(l->at, cap, sizeof *a);
+    if (a) l->at = a;
+    double *v = a ? hoc_realloc(l->uv, 2 * cap, sizeof *v) : NULL;
+    if (v) l->uv = v;
+    HOC_CHECK(a && v, HOC_ERR_MEMORY, "out of memory for the best mesh reached");
+    l->cap = cap;
+  }
+  l->at[l->n] = at;
+  memcpy(l->uv + 2 * l->n, uv, 2 * sizeof *uv);
+  l->n++;
+  return HOC_OK;
+}
+
 hoc_status hoc_opt_snapshot_take(hoc_opt_snapshot *s, const hoc_mesh *m, size_t tangled, double f) {
   HOC_TRY(keep(&s->param, m->param, 2 * m->n_nodes));
-  HOC_TRY(keep(&s->xyz, m->xyz, 3 * m->n_nodes));
-  HOC_TRY(keep(&s->slot_uv, m->slot_uv, 2 * m->n_slots));
-  HOC_TRY(keep(&s->elem_uv, m->elem_uv, 2 * m->n_elems * (size_t)m->np));
   HOC_TRY(keep(&s->line_t, m->line_t, 2 * m->n_lines));
+  s->slot_uv.n = s->elem_uv.n = 0;
+  /* (compared bit for bit, so that restoring gives the same bits back) */
+  for (size_t k = 0; k < m->n_slots; ++k) {
+    const double *uv = m->slot_uv + 2 * k;
+    if (memcmp(uv, m->param + 2 * m->slot_node[k], 2 * sizeof *uv))
+      HOC_TRY(keep_uv(&s->slot_uv, k, uv));
+  }
+  size_t n = m->n_elems * (size_t)m->np;
+  for (size_t j = 0; j < n; ++j) {
+    const double *uv = m->elem_uv + 2 * j;
+    if (memcmp(uv, m->slot_uv + 2 * m->elem_slot[j], 2 * sizeof *uv))
+      HOC_TRY(keep_uv(&s->elem_uv, j, uv));
+  }
   s->tangled = tangled;
   s->objective = f;
   return HOC_OK;
 }
 
-void hoc_opt_snapshot_restore(const hoc_opt_snapshot *s, hoc_mesh *m) {
+hoc_status hoc_opt_snapshot_restore(const hoc_opt_snapshot *s, hoc_mesh *m) {
+  unsigned char *moved;
+  HOC_ALLOC(moved, m->n_nodes + 1);
+  for (size_t i = 0; i < m->n_nodes; ++i)
+    moved[i] = memcmp(m->param + 2 * i, s->param + 2 * i, 2 * sizeof *s->param) != 0;
   memcpy(m->param, s->param, 2 * m->n_nodes * sizeof *s->param);
-  memcpy(m->xyz, s->xyz, 3 * m->n_nodes * sizeof *s->xyz);
-  memcpy(m->slot_uv, s->slot_uv, 2 * m->n_slots * sizeof *s->slot_uv);
-  memcpy(m->elem_uv, s->elem_uv, 2 * m->n_elems * (size_t)m->np * sizeof *s->elem_uv);
   memcpy(m->line_t, s->line_t, 2 * m->n_lines * sizeof *s->line_t);
+  for (size_t k = 0; k < m->n_slots; ++k)
+    memcpy(m->slot_uv + 2 * k, m->param + 2 * m->slot_node[k], 2 * sizeof *m->slot_uv);
+  for (size_t a = 0; a < s->slot_uv.n; ++a)
+    memcpy(m->slot_uv + 2 * s->slot_uv.at[a], s->slot_uv.uv + 2 * a, 2 * sizeof *m->slot_uv);
+  size_t n = m->n_elems * (size_t)m->np;
+  for (size_t j = 0; j < n; ++j)
+    memcpy(m->elem_uv + 2 * j, m->slot_uv + 2 * m->elem_slot[j], 2 * sizeof *m->elem_uv);
+  for (size_t a = 0; a < s->elem_uv.n; ++a)
+    memcpy(m->elem_uv + 2 * s->elem_uv.at[a], s->elem_uv.uv + 2 * a, 2 * sizeof *m->elem_uv);
+  hoc_status status = hoc_mesh_update_xyz_of(m, moved);
+  free(moved);
+  return status;
 }
 
 hoc_status hoc_mesh_optimize(hoc_mesh *mesh, const hoc_optimize_options *options,
@@ -85,18 +126,18 @@ hoc_status hoc_mesh_optimize(hoc_mesh *mesh, const hoc_optimize_options *options
    * sweep, as a protected run would, so that run would only repeat it. */
   if (status == HOC_OK && a.tangled_final && !limited && may_protect) {
     status = hoc_opt_snapshot_take(&first, mesh, a.tangled_final, a.objective_final);
-    if (status == HOC_OK) {
-      hoc_opt_snapshot_restore(&start, mesh);
-      status = hoc_opt_run(mesh, options, 1, a.iterations, t0, &b, &limited_b);
-    }
+    if (status == HOC_OK) status = hoc_opt_snapshot_restore(&start, mesh);
+    if (status == HOC_OK) status = hoc_opt_run(mesh, options, 1, a.iterations, t0, &b, &limited_b);
     if (status == HOC_OK && b.tangled_final < a.tangled_final) {
       b.diagnostics.protected_run = a.iterations + 1;
       b.tangled_initial = a.tangled_initial;
       b.objective_initial = a.objective_initial;
       a = b;
     } else if (first.param) {
-      hoc_opt_snapshot_restore(&first, mesh); /* (also when the protected run failed) */
+      /* (also when the protected run failed) */
+      hoc_status restored = hoc_opt_snapshot_restore(&first, mesh);
       if (status == HOC_OK) a.iterations = b.iterations; /* sweeps made, though not kept */
+      if (status == HOC_OK) status = restored;
     }
   }
   a.seconds = hoc_opt_now() - t0;

@@ -21,12 +21,12 @@ static hoc_status block_f_at(hoc_opt *o, size_t b, int dof, double h, hoc_opt_sc
   for (int c = 0; c < nd; ++c) st[c] = c == dof ? h : 0;
   o->trial.alpha[hoc_opt_tb(o, b)] = 1;
   size_t n = 0;
-  size_t nlist =
-      o->B->bn_start[b + 1] - o->B->bn_start[b] + o->B->carry_start[b + 1] - o->B->carry_start[b];
+  size_t nlist = o->B->bn_start[b + 1] - o->B->bn_start[b] + hoc_opt_carry_end(o->B, b) -
+                 hoc_opt_carry_begin(o->B, b);
   size_t *list = hoc_calloc(nlist + 1, sizeof *list);
   HOC_CHECK(list, HOC_ERR_MEMORY, "out of memory");
   for (size_t c = o->B->bn_start[b]; c < o->B->bn_start[b + 1]; ++c) list[n++] = o->B->bn_node[c];
-  for (size_t j = o->B->carry_start[b]; j < o->B->carry_start[b + 1]; ++j)
+  for (size_t j = hoc_opt_carry_begin(o->B, b); j < hoc_opt_carry_end(o->B, b); ++j)
     list[n++] = o->B->carry_node[j];
   hoc_status st2 = hoc_opt_trial_reserve(o, list, n);
   if (st2 == HOC_OK) {
@@ -74,12 +74,12 @@ hoc_status hoc_mesh_check_gradient(hoc_mesh *mesh, hoc_measure measure, int fix_
       /* the node owning this unknown sets the scale of the step */
       size_t k = ctx.B->bn_node[ctx.B->bn_start[b]];
       for (size_t c = ctx.B->bn_start[b]; c < ctx.B->bn_start[b + 1]; ++c)
-        if (ctx.B->node_off[ctx.B->bn_node[c]] <= d) k = ctx.B->bn_node[c];
-      int dd = d - ctx.B->node_off[k];
+        if (hoc_opt_node_off(ctx.B, ctx.B->bn_node[c]) <= d) k = ctx.B->bn_node[c];
+      int dd = d - hoc_opt_node_off(ctx.B, k);
       const double *dz = ctx.node.dz + 6 * k + 3 * dd;
       double speed = sqrt(dz[0] * dz[0] + dz[1] * dz[1] + dz[2] * dz[2]);
       if (!(speed > 0)) continue;
-      double h = HOC_OPT_FD_STEP * ctx.adj.hsize[k] / speed, gd = scr->g[d];
+      double h = HOC_OPT_FD_STEP * hoc_opt_hsize(&ctx, k) / speed, gd = scr->g[d];
       /* fourth-order central difference */
       double fp, fm, fp2, fm2;
       HOC_TRY_GOTO(block_f_at(&ctx, b, d, h, scr, &fp), done);

@@ -55,16 +55,74 @@ hoc_status hoc_opt_frames_setup(hoc_opt *o) {
   for (size_t e = 0; e < ne; ++e) want += !o->adj.touched || o->adj.touched[e];
   o->fc.cap = o->m->order >= HOC_OPT_FRAME_MIN_ORDER ? HOC_OPT_FRAME_POOL_BYTES / per : 0;
   if (o->fc.cap > want) o->fc.cap = want;
+  o->fc.dynamic = o->fc.cap && o->fc.cap < want;
   HOC_ALLOC(o->fc.slot, ne + 1);
   if (o->fc.cap) {
     o->fc.pool = hoc_realloc(NULL, o->fc.cap * 9 * (size_t)o->fc.npts, sizeof *o->fc.pool);
-    if (!o->fc.pool) o->fc.cap = 0; /* (not kept: every evaluation from the nodes) */
+    if (o->fc.dynamic && o->fc.pool) {
+      o->fc.owner = hoc_realloc(NULL, o->fc.cap, sizeof *o->fc.owner);
+      o->fc.fresh = hoc_realloc(NULL, o->fc.cap, sizeof *o->fc.fresh);
+    }
+    if (!o->fc.pool || (o->fc.dynamic && (!o->fc.owner || !o->fc.fresh))) {
+      free(o->fc.pool);
+      free(o->fc.owner);
+      free(o->fc.fresh);
+      o->fc.pool = NULL;
+      o->fc.owner = o->fc.fresh = NULL;
+      o->fc.cap = 0; /* (not kept: every evaluation from the nodes) */
+      o->fc.dynamic = 0;
+    }
   }
-  /* the elements a free node can change, in element order, as many as fit */
+  if (o->fc.dynamic) {
+    for (size_t e = 0; e < ne; ++e) o->fc.slot[e] = SIZE_MAX;
+    for (size_t k = 0; k < o->fc.cap; ++k) o->fc.owner[k] = SIZE_MAX;
+    return HOC_OK;
+  }
+  /* every element a free node can change, in element order */
   size_t k = 0;
   for (size_t e = 0; e < ne; ++e)
     o->fc.slot[e] = k < o->fc.cap && (!o->adj.touched || o->adj.touched[e]) ? k++ : SIZE_MAX;
   return HOC_OK;
+}
+
+void hoc_opt_frames_assign(hoc_opt *o) {
+  if (!o->fc.dynamic) return;
+  const hoc_mesh *m = o->m;
+  size_t ne = m->n_elems;
+  unsigned char *want = o->el.near_e; /* (scratch: hoc_opt_mark_near is done with it) */
+  memset(want, 0, ne);
+  for (size_t k = 0; k < m->n_nodes; ++k)
+    if (o->node.active[k])
+      for (size_t a = o->adj.ne_start[k]; a < o->adj.ne_start[k + 1]; ++a)
+        want[o->adj.ne_elem[a]] = 1;
+  /* places of elements no longer wanted are free; the wanted keep theirs */
+  size_t free_at = 0, n_fresh = 0;
+  for (size_t k = 0; k < o->fc.cap; ++k) {
+    size_t e = o->fc.owner[k];
+    if (e != SIZE_MAX && !want[e]) {
+      o->fc.slot[e] = SIZE_MAX;
+      o->fc.owner[k] = SIZE_MAX;
+    }
+  }
+  for (size_t e = 0; e < ne; ++e) {
+    if (!want[e] || o->fc.slot[e] != SIZE_MAX) continue;
+    while (free_at < o->fc.cap && o->fc.owner[free_at] != SIZE_MAX) ++free_at;
+    if (free_at == o->fc.cap) break;
+    o->fc.owner[free_at] = e;
+    o->fc.slot[e] = free_at;
+    o->fc.fresh[n_fresh++] = e;
+  }
+  memset(want, 0, ne);
+#pragma omp parallel
+  {
+    double x[3 * NP_MAX], n[3 * NP_MAX];
+#pragma omp for schedule(static)
+    for (size_t a = 0; a < n_fresh; ++a) {
+      size_t e = o->fc.fresh[a];
+      hoc_opt_gather(o, e, x, n);
+      hoc_element_frames(o->t, x, n, hoc_opt_frames_of(o, e));
+    }
+  }
 }
 
 void hoc_opt_gather(const hoc_opt *o, size_t e, double *x, double *n) {

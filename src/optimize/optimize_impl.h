@@ -50,6 +50,7 @@
 #include "mesh/mesh.h"
 #include "quality/quality.h"
 
+#include <math.h>
 #include <stddef.h>
 #include <stdint.h>
 
@@ -66,15 +67,16 @@ typedef struct hoc_opt_blockset {
   uint32_t *be_start, *be_elem; /* block -> the elements it touches */
   uint32_t *bd_start;           /* block -> first of its unknowns */
   uint32_t *node_block;         /* [n_nodes] block of a free node (HOC_OPT_NO_BLOCK if fixed) */
-  int *node_off;                /* [n_nodes] offset of the node's unknowns in its block */
-  uint32_t *carry_start;        /* [n_blocks+1] nodes a vertex block carries ... */
+  int *node_off;                /* [n_nodes] offset of the node's unknowns in its block
+                                   (NULL: every block is a single node, offset 0) */
+  uint32_t *carry_start;        /* [n_blocks+1] nodes a vertex block carries (NULL: none) ... */
   uint32_t *carry_node;
   uint16_t *carry_code; /* ... and their weights, as corner * np + local node of the element
                            they were found in (hoc_opt_carry_w) */
   int max_nd;      /* most unknowns in a block */
   int n_colors;
   size_t *color_start; /* [n_colors+1] */
-  size_t *color_block;
+  uint32_t *color_block;
   /* The block's place among its colour's blocks and the first of its
    * unknowns among theirs: where its trial values are (hoc_opt_trial) */
   uint32_t *cpos, *cbd;       /* [n_blocks] */
@@ -93,12 +95,12 @@ typedef struct hoc_opt_adjacency {
   unsigned char *ndof; /* [n_nodes] unknowns of the node: 0, 1 (t) or 2 (u, v) */
   uint32_t *ne_start; /* [n_nodes+1] node -> elements (32-bit, as the block lists) */
   uint32_t *ne_elem;  /* element */
-  int *ne_local;      /* local index of the node in it */
+  uint16_t *ne_local; /* local index of the node in it */
   uint32_t *ns_start; /* [n_nodes+1] node -> slots */
   uint32_t *ns_slot;
   uint32_t *nl_start; /* [n_nodes+1] node -> lines */
   uint32_t *nl_line;
-  double *hsize;              /* [n_nodes] local length: bound on one step's displacement */
+  double *elem_h;             /* [n_elems] longest edge of the element's corners (hoc_opt_hsize) */
   unsigned char *on_boundary; /* [n_elems] has a node on a CAD curve or vertex: kept unfolded in
                                  (u,v) so no node leaves the trimmed face (inside, 3D validity
                                  of the neighbours is the barrier) */
@@ -183,11 +185,18 @@ typedef struct hoc_opt_trial {
  * every node of the element, and an accepted step moves them by its nodes'
  * changes only. So a single node's visit costs in proportion to the points
  * of its elements (p^2), not to points times nodes (p^4). Refreshed from
- * the nodes at every sweep's start for the elements that moved. */
+ * the nodes at every sweep's start for the elements that moved. When the
+ * pool holds every element a free node can change, each keeps its place;
+ * otherwise the places go at each sweep's start to the elements of awake
+ * nodes, in element order (hoc_opt_frames_assign): after the first sweeps
+ * few nodes are awake, and those are the ones visited again and again. */
 typedef struct hoc_opt_frames {
   int npts;       /* points per element (hoc_element_frame_points) */
   size_t cap;     /* elements the pool holds */
+  int dynamic;    /* the pool holds fewer than the elements a free node can change */
   size_t *slot;   /* [n_elems] the element's place in the pool, SIZE_MAX if not kept */
+  size_t *owner;  /* [cap] the element at each place, SIZE_MAX if none (dynamic) */
+  size_t *fresh;  /* [cap] elements given a place at this sweep's start (dynamic) */
   double *pool;   /* [cap][9][npts] */
 } hoc_opt_frames;
 
@@ -224,16 +233,43 @@ typedef struct hoc_growlist {
   size_t n, cap;
 } hoc_growlist;
 
+/* Parameter pairs kept where they differ from what the rest of a
+ * snapshot gives: item at[k] has the values uv[2k], uv[2k + 1]. */
+typedef struct hoc_opt_uv_list {
+  size_t *at;
+  double *uv;
+  size_t n, cap;
+} hoc_opt_uv_list;
+
 /* The mesh state the optimiser changes (node parameters and positions, slot
  * and element parameters, line ends), kept while untangling so that a run
  * that ends with more tangled elements than it once had returns the best
  * state reached: a raised regularisation lets valid neighbours of a fold
- * pass through sigma = 0, which does not always pay off. */
+ * pass through sigma = 0, which does not always pay off. Kept compactly,
+ * since a mesh of order 10 has about 50 nodes per element: the nodes'
+ * parameters and the lines' ends whole; a slot's parameters only where
+ * they differ from its node's (curve and vertex nodes, pole slots), an
+ * element's copy of a node's parameters only where it differs from its
+ * slot's (unwrapped across a seam); positions not at all: restoring
+ * evaluates them from the parameters for the nodes that moved since. */
 typedef struct hoc_opt_snapshot {
-  double *param, *xyz, *slot_uv, *elem_uv, *line_t;
+  double *param, *line_t;
+  hoc_opt_uv_list slot_uv, elem_uv;
   size_t tangled; /* SIZE_MAX: none taken */
   double objective;
 } hoc_opt_snapshot;
+
+/* Offset of node k's unknowns in its block of B. */
+static inline int hoc_opt_node_off(const hoc_opt_blockset *B, size_t k) {
+  return B->node_off ? B->node_off[k] : 0;
+}
+/* The nodes block b of B carries: carry_node[begin .. end). */
+static inline size_t hoc_opt_carry_begin(const hoc_opt_blockset *B, size_t b) {
+  return B->carry_start ? B->carry_start[b] : 0;
+}
+static inline size_t hoc_opt_carry_end(const hoc_opt_blockset *B, size_t b) {
+  return B->carry_start ? B->carry_start[b + 1] : 0;
+}
 
 /* Block b's (of o->B) place in the trial's per-block arrays, and its step. */
 static inline size_t hoc_opt_tb(const hoc_opt *o, size_t b) {
@@ -241,6 +277,16 @@ static inline size_t hoc_opt_tb(const hoc_opt *o, size_t b) {
 }
 static inline double *hoc_opt_step_of(const hoc_opt *o, size_t b) {
   return o->trial.step + o->B->cbd[b];
+}
+
+/* Local length of node k: the longest edge of the corners of its elements,
+ * a bound on one step's displacement (kept per element: at high orders
+ * nodes outnumber elements 50 to 1). */
+static inline double hoc_opt_hsize(const hoc_opt *o, size_t k) {
+  double h = 0;
+  for (size_t a = o->adj.ne_start[k]; a < o->adj.ne_start[k + 1]; ++a)
+    h = fmax(h, o->adj.elem_h[o->adj.ne_elem[a]]);
+  return h;
 }
 
 /* Element e may not fold between the samples (its steps run the exact
@@ -316,6 +362,9 @@ static inline double *hoc_opt_frames_of(const hoc_opt *o, size_t e) {
 void hoc_opt_frames_trial(const hoc_opt *o, size_t e, const double *fr, double *out);
 /* The frame pool and which elements it keeps (setup). */
 hoc_status hoc_opt_frames_setup(hoc_opt *o);
+/* A dynamic pool's places to the elements of awake nodes, at a sweep's
+ * start (no node moving); their frames from their nodes. */
+void hoc_opt_frames_assign(hoc_opt *o);
 /* Per-element state at a sweep's start; f, smallest q and tangled count. */
 hoc_status hoc_opt_sweep_start(hoc_opt *o, double *objective, double *min_q, size_t *tangled);
 /* Puts nodes with nothing to gain to sleep (before the first sweep). */
@@ -379,7 +428,7 @@ hoc_status hoc_opt_run(hoc_mesh *mesh, const hoc_optimize_options *options, int 
 /* Seconds on a monotonic clock. */
 double hoc_opt_now(void);
 hoc_status hoc_opt_snapshot_take(hoc_opt_snapshot *s, const hoc_mesh *m, size_t tangled, double f);
-void hoc_opt_snapshot_restore(const hoc_opt_snapshot *s, hoc_mesh *m);
+hoc_status hoc_opt_snapshot_restore(const hoc_opt_snapshot *s, hoc_mesh *m);
 void hoc_opt_snapshot_free(hoc_opt_snapshot *s);
 
 #endif

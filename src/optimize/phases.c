@@ -113,7 +113,7 @@ static hoc_status restart_state(run *r) {
 
 /* The mesh as in snapshot s, and every element's state from it. */
 static hoc_status restore(run *r, const hoc_opt_snapshot *s) {
-  hoc_opt_snapshot_restore(s, r->mesh);
+  HOC_TRY(hoc_opt_snapshot_restore(s, r->mesh));
   HOC_TRY(hoc_opt_eval_all(&r->ctx));
   return restart_state(r);
 }
@@ -139,7 +139,7 @@ static hoc_status begin(run *r) {
   HOC_TRY(restart_state(r));
   r->res.objective_initial = r->f;
   r->fewest = r->tangled;
-  if (r->tangled) HOC_TRY(hoc_opt_snapshot_take(&r->best, r->mesh, r->tangled, r->f));
+  /* (the start's snapshot is taken in the first sweep, after the screening) */
   r->it = r->it0;
   r->res.best_iteration = r->it0;
   new_attempt(r, r->opts.max_iterations);
@@ -181,10 +181,14 @@ static hoc_status sweep(run *r, size_t *moved) {
   o->cfg.wake_factor = r->tangled ? HOC_OPT_WAKE_UNTANGLING : HOC_OPT_WAKE_SMOOTHING;
   if (r->it == r->it0 + 1) {
     HOC_TRY(hoc_opt_screen(o));
+    /* the start as the best state so far: taken once the screening's
+     * memory is free (at high orders each is a large share of the mesh's) */
+    if (r->tangled) HOC_TRY(hoc_opt_snapshot_take(&r->best, r->mesh, r->tangled, r->f));
     hoc_opt_wake_all(o);
     for (size_t e = 0; e < mesh->n_elems; ++e)
       if (o->el.qe[e] < HOC_OPT_POOR_Q_SHARE * qmean) wake_element(r, e);
   }
+  hoc_opt_frames_assign(o);
   /* the natural blocks, then every node on its own */
   for (int fam = 0; fam < 2; ++fam) {
     o->B = &o->fam[fam];

@@ -112,7 +112,7 @@ static hoc_status polish_patch(hoc_opt *o, size_t e0, unsigned char *mark) {
         const double *dz = o->node.dz + 6 * k + 3 * d;
         double speed = sqrt(dz[0] * dz[0] + dz[1] * dz[1] + dz[2] * dz[2]);
         if (!(speed > 0)) continue;
-        double h = (dir % 2 ? -1 : 1) * share * o->adj.hsize[k] / speed;
+        double h = (dir % 2 ? -1 : 1) * share * hoc_opt_hsize(o, k) / speed;
         status = hoc_opt_trial_reserve(o, &k, 1);
         if (status != HOC_OK) goto done;
         double *tp = hoc_opt_tpar(o, k);

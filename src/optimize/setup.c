@@ -27,11 +27,12 @@ void hoc_opt_free(hoc_opt *o) {
       o->adj.ns_slot,     o->adj.nl_start, o->adj.nl_line,  o->node.dz,         o->node.normal,
       o->el.delta,        o->el.valid,     o->el.pvalid,    o->adj.on_boundary, o->el.region,
       o->el.was_region,   o->el.dirty,     o->el.delta_own, o->el.fe,           o->el.qe,
-      o->adj.hsize,       o->node.active,  o->node.moving,  o->trial.step,      o->trial.alpha,
+      o->adj.elem_h,      o->node.active,  o->node.moving,  o->trial.step,      o->trial.alpha,
       o->trial.f0,        o->trial.fnew,   o->trial.slope,  o->trial.state,     o->trial.list,
       o->trial.committed, o->trial.tpar,   o->trial.txyz,   o->trial.tdz,       o->trial.tslot_uv,
       o->trial.tnormal,   o->trial.tix,    o->trial.tsbase, o->el.xvalid,    o->node.near,    o->el.near_e,       o->adj.touched,
-      o->el.has_fold,     o->el.fold_rs,   o->el.fragile,   o->fc.slot,         o->fc.pool};
+      o->el.has_fold,     o->el.fold_rs,   o->el.fragile,   o->fc.slot,         o->fc.pool,
+      o->fc.owner,        o->fc.fresh};
   for (size_t i = 0; i < sizeof p / sizeof *p; ++i) free(p[i]);
 }
 
@@ -150,7 +151,7 @@ hoc_status hoc_opt_setup(hoc_opt *o, hoc_mesh *m, hoc_measure measure, int fix_c
     for (size_t k = 0; k < np; ++k) {
       size_t i = m->conn[e * np + k], pos = start[i]++;
       items[pos] = e;
-      o->adj.ne_local[pos] = (int)k;
+      o->adj.ne_local[pos] = (uint16_t)k;
     }
   hoc_opt_csr_restore(nn, start);
   HOC_TRY(narrow_csr(nn, ne * np, &start, &items, &o->adj.ne_start, &o->adj.ne_elem));
@@ -209,7 +210,7 @@ hoc_status hoc_opt_setup(hoc_opt *o, hoc_mesh *m, hoc_measure measure, int fix_c
   HOC_ALLOC(o->el.fe, ne);
   HOC_ALLOC(o->el.qe, ne);
   memset(o->el.dirty, 1, ne);
-  HOC_ALLOC(o->adj.hsize, nn);
+  HOC_ALLOC(o->adj.elem_h, ne);
   HOC_ALLOC(o->node.active, nn);
   HOC_ALLOC(o->node.near, nn);
   HOC_ALLOC(o->el.near_e, ne);
@@ -223,13 +224,13 @@ hoc_status hoc_opt_setup(hoc_opt *o, hoc_mesh *m, hoc_measure measure, int fix_c
   HOC_ALLOC(o->trial.list, nb + 1);
   HOC_ALLOC(o->trial.committed, nb + 1);
   HOC_ALLOC(o->trial.tix, nn + 1);
-  /* local length: the longest edge of the linear sub-triangles around */
+  /* local length (hoc_opt_hsize): the longest edge of each element's corners */
   for (size_t e = 0; e < ne; ++e) {
     const size_t *cn = m->conn + e * np;
     double h = 0;
     for (int k = 0; k < 3; ++k)
       h = fmax(h, dist3(m->xyz + 3 * cn[k], m->xyz + 3 * cn[(k + 1) % 3]));
-    for (size_t k = 0; k < np; ++k) o->adj.hsize[cn[k]] = fmax(o->adj.hsize[cn[k]], h);
+    o->adj.elem_h[e] = h;
   }
   for (int f = 0; f < 2; ++f)
     for (size_t b = 0; b < o->fam[f].n_blocks; ++b) {

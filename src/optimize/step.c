@@ -20,7 +20,7 @@ void hoc_opt_block_model(const hoc_opt *o, size_t b, hoc_opt_scratch *s, double 
                          double *H) {
   const hoc_mesh *m = o->m;
   int np = o->np, nd = (int)(o->B->bd_start[b + 1] - o->B->bd_start[b]);
-  int carries = o->B->carry_start[b + 1] > o->B->carry_start[b];
+  int carries = hoc_opt_carry_end(o->B, b) > hoc_opt_carry_begin(o->B, b);
   *f = 0;
   memset(g, 0, (size_t)nd * sizeof *g);
   memset(H, 0, (size_t)nd * (size_t)nd * sizeof *H);
@@ -32,7 +32,7 @@ void hoc_opt_block_model(const hoc_opt *o, size_t b, hoc_opt_scratch *s, double 
       size_t node = cn[i];
       s->w[i] = 1;
       if (o->B->node_block[node] == b) {
-        s->off[i] = o->B->node_off[node];
+        s->off[i] = hoc_opt_node_off(o->B, node);
         s->nd[i] = o->adj.ndof[node];
       } else if (carries && (s->w[i] = hoc_opt_carry_weight(o, b, node)) > 0) {
         s->off[i] = 0;
@@ -235,7 +235,7 @@ static hoc_status line_search(hoc_opt *o, size_t *list, size_t nt, size_t n_eval
       size_t b = list[a];
       for (size_t c = o->B->bn_start[b]; c < o->B->bn_start[b + 1]; ++c)
         elist[ne_list++] = o->B->bn_node[c];
-      for (size_t j = o->B->carry_start[b]; j < o->B->carry_start[b + 1]; ++j)
+      for (size_t j = hoc_opt_carry_begin(o->B, b); j < hoc_opt_carry_end(o->B, b); ++j)
         elist[ne_list++] = o->B->carry_node[j];
     }
     HOC_TRY_GOTO(hoc_opt_trial_reserve(o, elist, ne_list), end);
@@ -256,7 +256,7 @@ static hoc_status line_search(hoc_opt *o, size_t *list, size_t nt, size_t n_eval
       if (ok) {
         for (size_t c = o->B->bn_start[b]; c < o->B->bn_start[b + 1]; ++c)
           hoc_opt_commit(o, o->B->bn_node[c]);
-        for (size_t j = o->B->carry_start[b]; j < o->B->carry_start[b + 1]; ++j)
+        for (size_t j = hoc_opt_carry_begin(o->B, b); j < hoc_opt_carry_end(o->B, b); ++j)
           hoc_opt_commit(o, o->B->carry_node[j]);
         o->trial.fnew[tb] = f;
         o->trial.state[tb] = 2;
@@ -325,12 +325,12 @@ hoc_status hoc_opt_do_color(hoc_opt *o, int color, hoc_opt_scratch *scr, int nth
     double alpha = 1, len_max = 0;
     for (size_t c = o->B->bn_start[b]; c < o->B->bn_start[b + 1]; ++c) {
       size_t k = o->B->bn_node[c];
-      const double *dz = o->node.dz + 6 * k, *sk = st + o->B->node_off[k];
+      const double *dz = o->node.dz + 6 * k, *sk = st + hoc_opt_node_off(o->B, k);
       double dx[3];
       for (int d = 0; d < 3; ++d)
         dx[d] = dz[d] * sk[0] + (o->adj.ndof[k] == 2 ? dz[3 + d] * sk[1] : 0);
       double len = sqrt(dx[0] * dx[0] + dx[1] * dx[1] + dx[2] * dx[2]);
-      len_max = fmax(len_max, len / o->adj.hsize[k]);
+      len_max = fmax(len_max, len / hoc_opt_hsize(o, k));
     }
     if (len_max > HOC_OPT_STEP_CAP) alpha = HOC_OPT_STEP_CAP / len_max;
     if (!(slope < 0) || !isfinite(slope) || !(len_max * alpha > HOC_OPT_STEP_MIN)) continue;
@@ -350,8 +350,8 @@ hoc_status hoc_opt_do_color(hoc_opt *o, int color, hoc_opt_scratch *scr, int nth
     size_t c1 = c0, n_eval = 0;
     for (; c1 < nt; ++c1) {
       size_t b = list[c1];
-      size_t k =
-          o->B->bn_start[b + 1] - o->B->bn_start[b] + o->B->carry_start[b + 1] - o->B->carry_start[b];
+      size_t k = o->B->bn_start[b + 1] - o->B->bn_start[b] + hoc_opt_carry_end(o->B, b) -
+                 hoc_opt_carry_begin(o->B, b);
       if (c1 > c0 && n_eval + k > HOC_OPT_TRIAL_NODES) break;
       n_eval += k;
     }

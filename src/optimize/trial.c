@@ -115,7 +115,7 @@ int hoc_opt_set_trial_params(hoc_opt *o, size_t b) {
   int inside = 1;
   for (size_t a = o->B->bn_start[b]; a < o->B->bn_start[b + 1]; ++a) {
     size_t k = o->B->bn_node[a];
-    int off = o->B->node_off[k];
+    int off = hoc_opt_node_off(o->B, k);
     double *tp = hoc_opt_tpar(o, k);
     if (m->dim[k] == HOC_ON_FACE) {
       const hoc_cad_face *f = &o->model->faces[m->entity[k]];
@@ -133,7 +133,7 @@ int hoc_opt_set_trial_params(hoc_opt *o, size_t b) {
       if (!(c->period > 0) && !param_ok(m->param[2 * k], v, c->lo, c->hi)) inside = 0;
     }
   }
-  for (size_t j = o->B->carry_start[b]; j < o->B->carry_start[b + 1]; ++j) {
+  for (size_t j = hoc_opt_carry_begin(o->B, b); j < hoc_opt_carry_end(o->B, b); ++j) {
     size_t c = o->B->carry_node[j];
     const hoc_cad_face *f = &o->model->faces[m->entity[c]];
     double *tp = hoc_opt_tpar(o, c);

@@ -161,10 +161,14 @@
 /* Memory ----------------------------------------------------------------- */
 
 /* Bytes of the pool of element frames (hoc_opt_frames: 9 numbers per
- * sample point, 43 KB an element at order 10, 2.5 KB at order 3): the
- * elements beyond it, in element order, are evaluated from their nodes
- * every time, at the cost of the frames (p^4 a visit instead of p^2). */
-#define HOC_OPT_FRAME_POOL_BYTES ((size_t)512 << 20)
+ * sample point, 43 KB an element at order 10, 2.5 KB at order 3): 1 500
+ * elements at order 10. A mesh with more elements lends the places at
+ * each sweep's start to the elements of awake nodes; the others are
+ * evaluated from their nodes, at the cost of the frames (p^4 a visit
+ * instead of p^2). After the first sweeps the awake elements are few, so
+ * a pool the size of a large mesh's (nist_ftc_07 at order 10: 4.9 GB)
+ * buys little: one of 512 MB took as long there as none. */
+#define HOC_OPT_FRAME_POOL_BYTES ((size_t)64 << 20)
 /* The frames are kept from this order on: below it an element has at most
  * 21 nodes and its frames cost little more from its nodes, while the pool
  * would more than double the memory of a large mesh (nist_ftc_07, 114 600
