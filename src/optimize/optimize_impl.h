@@ -336,8 +336,6 @@ void hoc_opt_wake_node(hoc_opt *o, size_t k);
 void hoc_opt_wake_all(hoc_opt *o);
 /* o->node.near: within HOC_OPT_NEAR_RINGS rings of a tangled element. */
 void hoc_opt_mark_near(hoc_opt *o);
-/* Nodes of an element of order p. */
-#define HOC_OPT_NP(p) (((p) + 1) * ((p) + 2) / 2)
 /* The active blocks of a colour of o->B into o->trial.list; their number. */
 size_t hoc_opt_select_active(hoc_opt *o, int color);
 
@@ -425,6 +423,18 @@ hoc_status hoc_opt_polish(hoc_opt *o);
  * all its sweeps with elements still tangled. */
 hoc_status hoc_opt_run(hoc_mesh *mesh, const hoc_optimize_options *options, int protect, int it0,
                        double t0, hoc_optimize_result *result, int *limited);
+/* The order thresholds of two rules of a run (tunables.h), which tests set
+ * out of reach to show what each rule does: hoc_opt_run takes
+ * hoc_opt_rules_default's, the tunables themselves. */
+typedef struct hoc_opt_rules {
+  int wake_near_min_order;      /* HOC_OPT_WAKE_NEAR_MIN_ORDER */
+  int exact_relax_uv_min_order; /* HOC_OPT_EXACT_RELAX_UV_MIN_ORDER */
+} hoc_opt_rules;
+void hoc_opt_rules_default(hoc_opt_rules *rules);
+/* hoc_opt_run with the given rules (NULL: the defaults). */
+hoc_status hoc_opt_run_rules(hoc_mesh *mesh, const hoc_optimize_options *options,
+                             const hoc_opt_rules *rules, int protect, int it0, double t0,
+                             hoc_optimize_result *result, int *limited);
 /* Seconds on a monotonic clock. */
 double hoc_opt_now(void);
 hoc_status hoc_opt_snapshot_take(hoc_opt_snapshot *s, const hoc_mesh *m, size_t tangled, double f);

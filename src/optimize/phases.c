@@ -73,6 +73,7 @@ typedef struct run {
   hoc_opt ctx;
   hoc_mesh *mesh;
   hoc_optimize_options opts; /* the caller's, defaults filled in */
+  hoc_opt_rules rules;
   hoc_opt_scratch *scr;      /* [nthreads] */
   int nthreads;
   int it0;                   /* sweeps are numbered from it0 + 1 ... */
@@ -162,7 +163,7 @@ static hoc_status sweep(run *r, size_t *moved) {
   hoc_mesh *mesh = r->mesh;
   *moved = 0;
   int local = o->cfg.exact && r->tangled;
-  int near_only = r->tangled && o->np >= HOC_OPT_NP(HOC_OPT_WAKE_NEAR_MIN_ORDER);
+  int near_only = r->tangled && r->mesh->order >= r->rules.wake_near_min_order;
   if (local || near_only) hoc_opt_mark_near(o);
   if (!local && o->cfg.local) hoc_opt_wake_all(o); /* the nodes left awake elsewhere */
   o->cfg.wake_near_only = near_only;
@@ -334,10 +335,10 @@ static hoc_status exact_phase(run *r, phase *next) {
   HOC_TRY(hoc_opt_snapshot_take(&r->best, r->mesh, r->tangled, r->f));
   r->fewest = r->tangled;
   r->res.converged = 0;
-  /* from HOC_OPT_EXACT_RELAX_UV_MIN_ORDER (tunables.h) the (u, v) rule is
-   * relaxed from the phase's start, as in a second attempt, which then
-   * has nothing left to relax and is not made */
-  o->cfg.relax_uv = r->mesh->order >= HOC_OPT_EXACT_RELAX_UV_MIN_ORDER;
+  /* from HOC_OPT_EXACT_RELAX_UV_MIN_ORDER (tunables.h; r->rules) the
+   * (u, v) rule is relaxed from the phase's start, as in a second attempt,
+   * which then has nothing left to relax and is not made */
+  o->cfg.relax_uv = r->mesh->order >= r->rules.exact_relax_uv_min_order;
   r->second = 0;
   o->cfg.eps = HOC_OPT_EPS;
   new_attempt(r, HOC_OPT_LATER_SWEEPS(r->opts.max_iterations));
@@ -394,11 +395,22 @@ static hoc_status polish_phase(run *r, phase *next) {
   return HOC_OK;
 }
 
+void hoc_opt_rules_default(hoc_opt_rules *rules) {
+  rules->wake_near_min_order = HOC_OPT_WAKE_NEAR_MIN_ORDER;
+  rules->exact_relax_uv_min_order = HOC_OPT_EXACT_RELAX_UV_MIN_ORDER;
+}
+
 /* One run of the optimiser from the mesh as it is (see hoc_mesh_optimize);
  * its sweeps are numbered from it0 + 1, its seconds from t0; *limited:
  * its sampled phase used all its sweeps with elements still tangled. */
 hoc_status hoc_opt_run(hoc_mesh *mesh, const hoc_optimize_options *options, int protect, int it0,
                        double t0, hoc_optimize_result *result, int *limited) {
+  return hoc_opt_run_rules(mesh, options, NULL, protect, it0, t0, result, limited);
+}
+
+hoc_status hoc_opt_run_rules(hoc_mesh *mesh, const hoc_optimize_options *options,
+                             const hoc_opt_rules *rules, int protect, int it0, double t0,
+                             hoc_optimize_result *result, int *limited) {
   *limited = 0;
   hoc_optimize_options opts;
   hoc_optimize_options_default(&opts);
@@ -415,6 +427,8 @@ hoc_status hoc_opt_run(hoc_mesh *mesh, const hoc_optimize_options *options, int 
   HOC_CHECK(r, HOC_ERR_MEMORY, "out of memory");
   r->mesh = mesh;
   r->opts = opts;
+  if (rules) r->rules = *rules;
+  else hoc_opt_rules_default(&r->rules);
   r->nthreads = omp_get_max_threads();
   r->it0 = it0;
   r->t0 = t0;

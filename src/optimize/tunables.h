@@ -67,7 +67,9 @@
  * a large mesh, every-move waking sends a wave through the whole mesh each
  * sweep; at high orders each visit costs p^2 sample points and such waves
  * dominate (gear_f360 at order 10: 79 s of CPU on one thread with this
- * rule; without it, not ended after 170 s of CPU on two). */
+ * rule; without it, not ended after 170 s of CPU on two). Test:
+ * tests/test_optimize_wake_near.c (a fold kept on a plane at order 6:
+ * without the rule, ten times the moves far from it). */
 #define HOC_OPT_WAKE_NEAR_MIN_ORDER 6
 
 /* While the exact phase untangles, only blocks within this many rings of
@@ -116,7 +118,10 @@
  * relaxed elements make, so the reason the sampled phase keeps the rule
  * (it trades one fold for several between the samples) does not hold
  * here. Not below: orders up to PROTECT_MAX_ORDER have the protected run
- * and their exact sweeps cost little. */
+ * and their exact sweeps cost little. Test: tests/test_optimize_exact_relax.c
+ * (folds between the samples on a plane's boundary at order 6: the exact
+ * phase opens them in 7 sweeps; without the rule it stalls, and the
+ * second attempt opens them 15 sweeps later). */
 #define HOC_OPT_EXACT_RELAX_UV_MIN_ORDER 6
 
 /* Above PROTECT_MAX_ORDER, in a whole-mesh run, a valid element with q
