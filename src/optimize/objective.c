@@ -47,13 +47,18 @@ void hoc_opt_frames_trial(const hoc_opt *o, size_t e, const double *fr, double *
   if (from != out) memcpy(out, fr, 9 * (size_t)o->fc.npts * sizeof *out);
 }
 
-hoc_status hoc_opt_frames_setup(hoc_opt *o) {
+hoc_status hoc_opt_frames_setup(hoc_opt *o, size_t bytes) {
   size_t ne = o->m->n_elems;
+  free(o->fc.slot);
+  free(o->fc.pool);
+  free(o->fc.owner);
+  free(o->fc.fresh);
+  memset(&o->fc, 0, sizeof o->fc);
   o->fc.npts = hoc_element_frame_points(o->t);
   size_t per = 9 * (size_t)o->fc.npts * sizeof(double);
   size_t want = 0;
   for (size_t e = 0; e < ne; ++e) want += !o->adj.touched || o->adj.touched[e];
-  o->fc.cap = o->m->order >= HOC_OPT_FRAME_MIN_ORDER ? HOC_OPT_FRAME_POOL_BYTES / per : 0;
+  o->fc.cap = o->m->order >= HOC_OPT_FRAME_MIN_ORDER ? bytes / per : 0;
   if (o->fc.cap > want) o->fc.cap = want;
   o->fc.dynamic = o->fc.cap && o->fc.cap < want;
   HOC_ALLOC(o->fc.slot, ne + 1);

@@ -358,8 +358,9 @@ static inline double *hoc_opt_frames_of(const hoc_opt *o, size_t e) {
 /* Frames of element e in the trial state of moving nodes, from its kept
  * frames fr, into out (which may be fr). */
 void hoc_opt_frames_trial(const hoc_opt *o, size_t e, const double *fr, double *out);
-/* The frame pool and which elements it keeps (setup). */
-hoc_status hoc_opt_frames_setup(hoc_opt *o);
+/* The frame pool of at most `bytes` and which elements it keeps (setup
+ * gives it HOC_OPT_FRAME_POOL_BYTES); any pool o had before is freed. */
+hoc_status hoc_opt_frames_setup(hoc_opt *o, size_t bytes);
 /* A dynamic pool's places to the elements of awake nodes, at a sweep's
  * start (no node moving); their frames from their nodes. */
 void hoc_opt_frames_assign(hoc_opt *o);
@@ -423,12 +424,13 @@ hoc_status hoc_opt_polish(hoc_opt *o);
  * all its sweeps with elements still tangled. */
 hoc_status hoc_opt_run(hoc_mesh *mesh, const hoc_optimize_options *options, int protect, int it0,
                        double t0, hoc_optimize_result *result, int *limited);
-/* The order thresholds of two rules of a run (tunables.h), which tests set
- * out of reach to show what each rule does: hoc_opt_run takes
- * hoc_opt_rules_default's, the tunables themselves. */
+/* The order thresholds of two rules of a run and the size of its frame
+ * pool (tunables.h), which tests set otherwise to show what each does:
+ * hoc_opt_run takes hoc_opt_rules_default's, the tunables themselves. */
 typedef struct hoc_opt_rules {
   int wake_near_min_order;      /* HOC_OPT_WAKE_NEAR_MIN_ORDER */
   int exact_relax_uv_min_order; /* HOC_OPT_EXACT_RELAX_UV_MIN_ORDER */
+  size_t frame_pool_bytes;      /* HOC_OPT_FRAME_POOL_BYTES */
 } hoc_opt_rules;
 void hoc_opt_rules_default(hoc_opt_rules *rules);
 /* hoc_opt_run with the given rules (NULL: the defaults). */

@@ -398,6 +398,7 @@ static hoc_status polish_phase(run *r, phase *next) {
 void hoc_opt_rules_default(hoc_opt_rules *rules) {
   rules->wake_near_min_order = HOC_OPT_WAKE_NEAR_MIN_ORDER;
   rules->exact_relax_uv_min_order = HOC_OPT_EXACT_RELAX_UV_MIN_ORDER;
+  rules->frame_pool_bytes = HOC_OPT_FRAME_POOL_BYTES;
 }
 
 /* One run of the optimiser from the mesh as it is (see hoc_mesh_optimize);
@@ -440,6 +441,8 @@ hoc_status hoc_opt_run_rules(hoc_mesh *mesh, const hoc_optimize_options *options
   if (status == HOC_OK)
     status = hoc_opt_setup(o, mesh, opts.measure, opts.fix_curves, opts.free_elements,
                            opts.free_rings);
+  if (status == HOC_OK && r->rules.frame_pool_bytes != HOC_OPT_FRAME_POOL_BYTES)
+    status = hoc_opt_frames_setup(o, r->rules.frame_pool_bytes);
   o->cfg.protect = protect; /* (setup clears the state) */
   if (status == HOC_OK) status = hoc_opt_eval_all(o);
   if (status == HOC_OK) status = hoc_opt_scratch_alloc(o, r->nthreads, &r->scr);

@@ -237,7 +237,7 @@ hoc_status hoc_opt_setup(hoc_opt *o, hoc_mesh *m, hoc_measure measure, int fix_c
       size_t foot = o->fam[f].be_start[b + 1] - o->fam[f].be_start[b];
       if (foot > o->max_foot) o->max_foot = foot;
     }
-  return hoc_opt_frames_setup(o);
+  return hoc_opt_frames_setup(o, HOC_OPT_FRAME_POOL_BYTES);
 }
 
 /* Nodes of one CAD evaluation call in hoc_opt_eval_all. */
