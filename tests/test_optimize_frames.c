@@ -18,35 +18,11 @@
  * SPDX-License-Identifier: GPL-2.0-or-later */
 #include "mesh/mesh.h"
 #include "optimize/optimize_impl.h"
+#include "test_shake.h"
 #include "test_util.h"
 
 #include <omp.h>
 #include <string.h>
-
-/* A 64-bit linear congruential generator: the same moves on every machine. */
-static double uniform(unsigned long long *state) {
-  *state = *state * 6364136223846793005ULL + 1442695040888963407ULL;
-  return (double)(*state >> 11) / 9007199254740992.0; /* [0, 1) */
-}
-
-/* Face nodes moved by up to amp * (du, dv), their element copies and slot too. */
-static void shake(hoc_mesh *m, double amp, double du, double dv, unsigned long long seed) {
-  size_t np = (size_t)m->np;
-  for (size_t i = 0; i < m->n_nodes; ++i) {
-    if (m->dim[i] != HOC_ON_FACE) continue;
-    double d[2] = {amp * du * (2 * uniform(&seed) - 1), amp * dv * (2 * uniform(&seed) - 1)};
-    m->param[2 * i] += d[0];
-    m->param[2 * i + 1] += d[1];
-    for (size_t e = 0; e < m->n_elems; ++e)
-      for (size_t k = 0; k < np; ++k) {
-        if (m->conn[e * np + k] != i) continue;
-        m->elem_uv[2 * (e * np + k)] += d[0];
-        m->elem_uv[2 * (e * np + k) + 1] += d[1];
-        memcpy(m->slot_uv + 2 * m->elem_slot[e * np + k], m->param + 2 * i, sizeof d);
-      }
-  }
-  CHECK_OK(hoc_mesh_update_xyz(m));
-}
 
 typedef struct outcome {
   hoc_optimize_result r;

@@ -26,16 +26,11 @@
 #include "mesh/mesh.h"
 #include "optimize/optimize_impl.h"
 #include "optimize/tunables.h"
+#include "test_shake.h"
 #include "test_util.h"
 
 #include <limits.h>
 #include <string.h>
-
-/* A 64-bit linear congruential generator: the same moves on every machine. */
-static double uniform(unsigned long long *state) {
-  *state = *state * 6364136223846793005ULL + 1442695040888963407ULL;
-  return (double)(*state >> 11) / 9007199254740992.0; /* [0, 1) */
-}
 
 /* Node i's parameters moved by d, its element copies too; its slots (on
  * the plane's single face, without seams) set to those. */
@@ -51,32 +46,6 @@ static void move_param(hoc_mesh *m, size_t i, const double *d) {
         uv[1] += d[1];
         memcpy(m->slot_uv + 2 * m->elem_slot[e * np + k], uv, 2 * sizeof *uv);
       }
-}
-
-/* Every face node moved by up to amp * h in u and v (a fixed seed). Each
- * face node has one slot on the single face, visited once per element:
- * the slots are set from the node's parameters instead of moved. */
-static void shake(hoc_mesh *m, double amp, double h, unsigned long long seed) {
-  size_t np = (size_t)m->np;
-  double *d = calloc(2 * m->n_nodes + 2, sizeof *d);
-  CHECK(d != NULL);
-  if (!d) return;
-  for (size_t i = 0; i < m->n_nodes; ++i) {
-    if (m->dim[i] != HOC_ON_FACE) continue;
-    d[2 * i] = amp * h * (2 * uniform(&seed) - 1);
-    d[2 * i + 1] = amp * h * (2 * uniform(&seed) - 1);
-    m->param[2 * i] += d[2 * i];
-    m->param[2 * i + 1] += d[2 * i + 1];
-  }
-  for (size_t e = 0; e < m->n_elems; ++e)
-    for (size_t k = 0; k < np; ++k) {
-      size_t i = m->conn[e * np + k];
-      m->elem_uv[2 * (e * np + k)] += d[2 * i];
-      m->elem_uv[2 * (e * np + k) + 1] += d[2 * i + 1];
-      if (m->dim[i] == HOC_ON_FACE)
-        memcpy(m->slot_uv + 2 * m->elem_slot[e * np + k], m->param + 2 * i, 2 * sizeof *d);
-    }
-  free(d);
 }
 
 /* The element with an edge on v = 0 nearest u = 1/2, folded: the node of
@@ -179,8 +148,7 @@ int main(void) {
   if (model) CHECK_OK(hoc_mesh_grid_linear(model, n, n, &lin));
   if (lin) CHECK_OK(hoc_mesh_elevate(lin, order, HOC_NODES_EQUISPACED, &m));
   if (!m) goto out;
-  shake(m, 0.02, 1.0 / (n * order), 12345);
-  CHECK_OK(hoc_mesh_update_xyz(m));
+  shake(m, 0.02, 1.0 / (n * order), 1.0 / (n * order), 12345);
   hoc_quality_stats st;
   CHECK_OK(hoc_mesh_measure(m, HOC_MEASURE_SHAPE, NULL, NULL, &st));
   CHECK(st.tangled == 0); /* the shaking folds nothing */
