@@ -53,6 +53,7 @@ hoc_status hoc_opt_frames_setup(hoc_opt *o, size_t bytes) {
   free(o->fc.pool);
   free(o->fc.owner);
   free(o->fc.fresh);
+  free(o->fc.want);
   memset(&o->fc, 0, sizeof o->fc);
   o->fc.npts = hoc_element_frame_points(o->t);
   size_t per = 9 * (size_t)o->fc.npts * sizeof(double);
@@ -67,13 +68,16 @@ hoc_status hoc_opt_frames_setup(hoc_opt *o, size_t bytes) {
     if (o->fc.dynamic && o->fc.pool) {
       o->fc.owner = hoc_realloc(NULL, o->fc.cap, sizeof *o->fc.owner);
       o->fc.fresh = hoc_realloc(NULL, o->fc.cap, sizeof *o->fc.fresh);
+      o->fc.want = hoc_calloc(ne + 1, sizeof *o->fc.want);
     }
-    if (!o->fc.pool || (o->fc.dynamic && (!o->fc.owner || !o->fc.fresh))) {
+    if (!o->fc.pool || (o->fc.dynamic && (!o->fc.owner || !o->fc.fresh || !o->fc.want))) {
       free(o->fc.pool);
       free(o->fc.owner);
       free(o->fc.fresh);
+      free(o->fc.want);
       o->fc.pool = NULL;
       o->fc.owner = o->fc.fresh = NULL;
+      o->fc.want = NULL;
       o->fc.cap = 0; /* (not kept: every evaluation from the nodes) */
       o->fc.dynamic = 0;
     }
@@ -94,8 +98,7 @@ void hoc_opt_frames_assign(hoc_opt *o) {
   if (!o->fc.dynamic) return;
   const hoc_mesh *m = o->m;
   size_t ne = m->n_elems;
-  unsigned char *want = o->el.near_e; /* (scratch: hoc_opt_mark_near is done with it) */
-  memset(want, 0, ne);
+  unsigned char *want = o->fc.want; /* (all 0 between calls) */
   for (size_t k = 0; k < m->n_nodes; ++k)
     if (o->node.active[k])
       for (size_t a = o->adj.ne_start[k]; a < o->adj.ne_start[k + 1]; ++a)

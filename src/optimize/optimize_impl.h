@@ -197,6 +197,7 @@ typedef struct hoc_opt_frames {
   size_t *slot;   /* [n_elems] the element's place in the pool, SIZE_MAX if not kept */
   size_t *owner;  /* [cap] the element at each place, SIZE_MAX if none (dynamic) */
   size_t *fresh;  /* [cap] elements given a place at this sweep's start (dynamic) */
+  unsigned char *want; /* [n_elems] scratch of hoc_opt_frames_assign (dynamic) */
   double *pool;   /* [cap][9][npts] */
 } hoc_opt_frames;
 

@@ -32,7 +32,7 @@ void hoc_opt_free(hoc_opt *o) {
       o->trial.committed, o->trial.tpar,   o->trial.txyz,   o->trial.tdz,       o->trial.tslot_uv,
       o->trial.tnormal,   o->trial.tix,    o->trial.tsbase, o->el.xvalid,    o->node.near,    o->el.near_e,       o->adj.touched,
       o->el.has_fold,     o->el.fold_rs,   o->el.fragile,   o->fc.slot,         o->fc.pool,
-      o->fc.owner,        o->fc.fresh};
+      o->fc.owner,        o->fc.fresh,     o->fc.want};
   for (size_t i = 0; i < sizeof p / sizeof *p; ++i) free(p[i]);
 }
 
