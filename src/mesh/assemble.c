@@ -518,8 +518,25 @@ static int end_param(const hoc_mesh *m, size_t i, int c, double near, double *t)
   }
   if (m->dim[i] != HOC_ON_VERTEX) return 0;
   int ok;
-  *t = vertex_t_on_curve(&m->model->curves[c], m->entity[i], near, &ok);
-  return ok;
+  const hoc_cad_curve *cv = &m->model->curves[c];
+  *t = vertex_t_on_curve(cv, m->entity[i], near, &ok);
+  if (ok) return 1;
+  /* a vertex that stands for another at its point (collapse.c): the
+   * curve's end there */
+  double ends[2] = {cv->lo, cv->hi}, x[6];
+  if (hoc_cad_curve_eval(m->model, c, 2, ends, x, NULL) != HOC_OK) {
+    hoc_error_clear();
+    return 0;
+  }
+  const double *v = m->model->vertices[m->entity[i]].xyz;
+  double d0 = dist3(x, v), d1 = dist3(x + 3, v), tol = hoc_mesh_collapse_distance(m->model);
+  if (d0 <= tol && d1 <= tol && !isnan(near))
+    *t = fabs(near - cv->lo) <= fabs(near - cv->hi) ? cv->lo : cv->hi;
+  else if (d0 <= tol || d1 <= tol)
+    *t = d0 <= d1 ? cv->lo : cv->hi;
+  else
+    return 0;
+  return 1;
 }
 
 static hoc_status line_params(hoc_mesh *m, size_t l) {
@@ -715,12 +732,26 @@ done:
 
 /* Assembly --------------------------------------------------------------- */
 
-hoc_status hoc_mesh_assemble(hoc_model *model, const hoc_mesh_source *src, double tolerance,
+static hoc_status assemble(hoc_model *model, const hoc_mesh_source *src, double tolerance,
+                           hoc_mesh **out);
+
+hoc_status hoc_mesh_assemble(hoc_model *model, const hoc_mesh_source *given, double tolerance,
                              hoc_mesh **out) {
   HOC_CHECK(out, HOC_ERR_ARGUMENT, "mesh output is NULL");
   *out = NULL;
-  HOC_CHECK(model && src, HOC_ERR_ARGUMENT, "NULL model or mesh source");
-  HOC_TRY(validate(model, src));
+  HOC_CHECK(model && given, HOC_ERR_ARGUMENT, "NULL model or mesh source");
+  HOC_TRY(validate(model, given));
+  hoc_mesh_source src = *given;
+  hoc_mesh_collapse collapse;
+  HOC_TRY(hoc_mesh_collapse_sides(model, &src, &collapse));
+  hoc_status status = assemble(model, &src, tolerance, out);
+  if (status == HOC_OK) (*out)->n_collapsed = collapse.n_dropped;
+  hoc_mesh_collapse_free(&collapse);
+  return status;
+}
+
+static hoc_status assemble(hoc_model *model, const hoc_mesh_source *src, double tolerance,
+                           hoc_mesh **out) {
   HOC_CHECK(src->xyz || src->param, HOC_ERR_ARGUMENT, "nodes have neither positions nor parameters");
   double tol = tolerance * model->diagonal;
   /* a given mesh: corners, curve and vertex nodes within `limit` of the

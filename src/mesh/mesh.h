@@ -53,6 +53,7 @@ struct hoc_mesh {
 
   signed char *face_orient; /* [n_faces] +1 if element normals follow phi_u x phi_v, -1 if
                                opposite, 0 if the face has no elements */
+  size_t n_collapsed;       /* triangles dropped at collapsed sides (collapse.c) */
   int n_failed_faces;
   int *failed_faces;        /* [n_failed_faces] face indices the mesher could not mesh */
   double off_cad;           /* largest distance of a given node position from its entity
@@ -97,6 +98,30 @@ typedef struct hoc_mesh_source {
  *  vertex node may lie twice that from a face it bounds (that far from its
  *  curve, the curve as far from the face). */
 hoc_status hoc_mesh_given_limit(hoc_model *model, double *limit);
+
+/** Owned arrays of a source rewritten by hoc_mesh_collapse_sides. */
+typedef struct hoc_mesh_collapse {
+  double *xyz, *param;
+  unsigned char *has_param;
+  signed char *dim;
+  int *entity, *elem_face, *line_curve;
+  size_t *conn, *line_conn, *node_tag;
+  size_t n_dropped; /* triangles with two corners at one point, dropped */
+} hoc_mesh_collapse;
+
+/** Linear sources only: the nodes of each degenerate curve (one that
+ *  evaluates to a point: a collapsed side the kernel left unmarked, which
+ *  gmsh meshes like any curve) and of the vertices at its ends become one
+ *  node (a vertex's if any); triangles and lines left with two corners at
+ *  it are dropped. Rewrites `src` to point into `c`'s arrays if anything
+ *  changes (free them with hoc_mesh_collapse_free after assembly), else
+ *  leaves it untouched. */
+hoc_status hoc_mesh_collapse_sides(const hoc_model *model, hoc_mesh_source *src,
+                                   hoc_mesh_collapse *c);
+void hoc_mesh_collapse_free(hoc_mesh_collapse *c);
+/** Distance within which nodes are one point for hoc_mesh_collapse_sides,
+ *  and a vertex that stands for another may end a curve there. */
+double hoc_mesh_collapse_distance(const hoc_model *model);
 
 /** Build a mesh from a triangulation: locate nodes without parameters on
  *  their entities, reparametrise curve and vertex nodes on the faces around

@@ -114,6 +114,16 @@ static hoc_status warn_failed_faces(const hoc_run *run, const hoc_mesh *lin) {
                        faces, nfail > 30 ? " ..." : "");
 }
 
+/* Triangles the assembly dropped at collapsed sides (mesh/collapse.c). */
+static hoc_status note_collapsed(const hoc_run *run, const hoc_mesh *lin) {
+  if (!lin->n_collapsed) return HOC_OK;
+  return hoc_run_event(run, HOC_EVENT_NOTE,
+                       "%zu linear triangle(s) with two corners at one point (a face side of "
+                       "zero length the model does not mark as collapsed) dropped; the side "
+                       "is one node",
+                       lin->n_collapsed);
+}
+
 /* hoc_mesh_model ---------------------------------------------------------- */
 
 /* The meshes of one run of hoc_mesh_model. */
@@ -239,6 +249,7 @@ static hoc_status mesh_model_run(const hoc_run *run, hoc_model *model, model_mes
     HOC_TRY_GOTO(linear_mesh(run, model, &lo, unlowered_min, prev_elements, &m->lin), done);
     double t_lin = hoc_pipeline_now() - t0;
     HOC_TRY_GOTO(warn_failed_faces(run, m->lin), done);
+    HOC_TRY_GOTO(note_collapsed(run, m->lin), done);
     HOC_TRY_GOTO(hoc_run_stage(run, r, "linear", m->lin, t_lin, NULL, NULL), done);
     *final = m->lin;
     if (o->order > 1) {
