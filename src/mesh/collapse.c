@@ -81,27 +81,33 @@ hoc_status hoc_mesh_collapse_sides(const hoc_model *model, hoc_mesh_source *src,
   HOC_CHECK(model && src && c, HOC_ERR_ARGUMENT, "NULL argument");
   memset(c, 0, sizeof *c);
   if (src->order != 1 || !src->n_nodes) return HOC_OK;
-  int any = 0;
-  for (int k = 0; k < model->n_curves && !any; ++k) any = model->curves[k].degenerate;
-  if (!any) return HOC_OK;
+  int n_degenerate = 0;
+  for (int k = 0; k < model->n_curves; ++k) n_degenerate += !!model->curves[k].degenerate;
+  if (!n_degenerate) return HOC_OK;
 
   size_t n = src->n_nodes;
   size_t *up = hoc_calloc(n, sizeof *up), *first = hoc_calloc((size_t)model->n_curves, sizeof *first),
          *to = NULL;
+  int *degenerate = hoc_calloc((size_t)n_degenerate, sizeof *degenerate);
   hoc_status status = HOC_OK;
-  if (!up || !first) {
+  if (!up || !first || !degenerate) {
     status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
     goto done;
   }
   for (size_t i = 0; i < n; ++i) up[i] = i;
-  for (int k = 0; k < model->n_curves; ++k) first[k] = SIZE_MAX;
+  for (int k = 0, j = 0; k < model->n_curves; ++k) {
+    first[k] = SIZE_MAX;
+    if (model->curves[k].degenerate) degenerate[j++] = k;
+  }
   /* each degenerate curve's nodes and end vertices' nodes: one node */
   double tol = hoc_mesh_collapse_distance(model), x[3], y[3];
   size_t merged = 0;
   for (size_t i = 0; i < n; ++i) {
     if (src->dim[i] == HOC_ON_FACE) continue;
-    for (int k = 0; k < model->n_curves; ++k) {
-      if (!model->curves[k].degenerate || !on_collapsed(model, src, i, k)) continue;
+    if (src->dim[i] == HOC_ON_CURVE && !model->curves[src->entity[i]].degenerate) continue;
+    for (int j = 0; j < n_degenerate; ++j) {
+      int k = degenerate[j];
+      if (!on_collapsed(model, src, i, k)) continue;
       if (first[k] == SIZE_MAX) {
         first[k] = i;
         continue;
@@ -189,6 +195,7 @@ done:
   if (status != HOC_OK) hoc_mesh_collapse_free(c);
   free(up);
   free(first);
+  free(degenerate);
   free(to);
   return status;
 }
