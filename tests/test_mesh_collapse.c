@@ -88,17 +88,9 @@ static void test_cone(void) {
         face[ne++] = 0;
       }
     }
-  hoc_mesh_source src = {0};
-  src.order = 1;
-  src.nodeset = HOC_NODES_EQUISPACED;
-  src.n_nodes = n;
-  src.xyz = xyz;
-  src.param = par;
-  src.dim = dim;
-  src.entity = ent;
-  src.n_elems = ne;
-  src.conn = conn;
-  src.elem_face = face;
+  hoc_mesh_source src = {.order = 1, .nodeset = HOC_NODES_EQUISPACED, .n_nodes = n, .xyz = xyz,
+                         .param = par, .dim = dim, .entity = ent, .n_elems = ne, .conn = conn,
+                         .elem_face = face};
   hoc_mesh *lin = NULL, *ho = NULL;
   CHECK_OK(hoc_mesh_assemble(model, &src, 1e-9, &lin));
   if (lin) {
