@@ -2,6 +2,7 @@
  * (closed directions), poles, wrapped evaluation and local inversion.
  * SPDX-License-Identifier: GPL-2.0-or-later */
 #include "cad/cad.h"
+#include "core/geometry.h"
 
 #include <float.h>
 #include <math.h>
@@ -71,11 +72,6 @@ static hoc_status build_lookup(int n, const int *tags, size_t stride, int **look
   return HOC_OK;
 }
 
-static double dist3(const double *a, const double *b) {
-  double dx = a[0] - b[0], dy = a[1] - b[1], dz = a[2] - b[2];
-  return sqrt(dx * dx + dy * dy + dz * dz);
-}
-
 enum { PROBES = 9 };
 
 /* Closed directions and poles of a face, measured: side u = lo is a pole if
@@ -99,7 +95,7 @@ static hoc_status detect_face_topology(hoc_model *m, hoc_cad_face *f, double tol
   for (int side = 0; side < 4; ++side) {
     spread[side] = 0;
     for (int k = 1; k < PROBES; ++k)
-      spread[side] = fmax(spread[side], dist3(xyz + 3 * (side * PROBES + k),
+      spread[side] = fmax(spread[side], hoc_dist3(xyz + 3 * (side * PROBES + k),
                                                xyz + 3 * (side * PROBES)));
     if (spread[side] < tol) f->pole[side] = 1;
   }
@@ -108,7 +104,7 @@ static hoc_status detect_face_topology(hoc_model *m, hoc_cad_face *f, double tol
     if (f->pole[2 * dir] && f->pole[2 * dir + 1]) continue; /* both sides points: not a seam */
     double gap = 0;
     for (int k = 0; k < PROBES; ++k)
-      gap = fmax(gap, dist3(xyz + 3 * ((2 * dir) * PROBES + k),
+      gap = fmax(gap, hoc_dist3(xyz + 3 * ((2 * dir) * PROBES + k),
                             xyz + 3 * ((2 * dir + 1) * PROBES + k)));
     if (gap < tol) f->period[dir] = f->hi[dir] - f->lo[dir];
   }
@@ -141,9 +137,9 @@ hoc_status hoc_cad_finish(hoc_model *m) {
               "curve %d has invalid parametric bounds", c->tag);
     double t[3] = {c->lo, 0.5 * (c->lo + c->hi), c->hi}, x[9];
     HOC_TRY(m->ops->curve_eval(m->ctx, c, 3, t, x, NULL));
-    if (dist3(x, x + 3) < tol && dist3(x, x + 6) < tol) {
+    if (hoc_dist3(x, x + 3) < tol && hoc_dist3(x, x + 6) < tol) {
       c->degenerate = 1;
-    } else if (dist3(x, x + 6) < tol && c->period == 0) {
+    } else if (hoc_dist3(x, x + 6) < tol && c->period == 0) {
       c->period = c->hi - c->lo;
     }
   }
@@ -175,7 +171,7 @@ static double curve_face_gap(const hoc_model *m, int c, int f) {
     return 0;
   }
   for (int i = 0; i < GAP_SAMPLES; ++i) {
-    double d = dist3(x + 3 * i, y + 3 * i);
+    double d = hoc_dist3(x + 3 * i, y + 3 * i);
     if (d > gap) gap = d; /* NaN ignored */
   }
   return gap;
@@ -207,7 +203,7 @@ hoc_status hoc_cad_tolerance(hoc_model *m, double *tolerance) {
           hoc_error_clear();
           continue;
         }
-        double d = dist3(y, m->vertices[ends[e]].xyz);
+        double d = hoc_dist3(y, m->vertices[ends[e]].xyz);
         if (d > tol) tol = d, at_curve = -1, at_face = face->tag;
       }
     }
@@ -219,10 +215,10 @@ hoc_status hoc_cad_tolerance(hoc_model *m, double *tolerance) {
       hoc_error_clear();
       continue;
     }
-    if (cv->v0 >= 0 && dist3(x, m->vertices[cv->v0].xyz) > tol)
-      tol = dist3(x, m->vertices[cv->v0].xyz), at_curve = cv->tag, at_face = -1;
-    if (cv->v1 >= 0 && dist3(x + 3, m->vertices[cv->v1].xyz) > tol)
-      tol = dist3(x + 3, m->vertices[cv->v1].xyz), at_curve = cv->tag, at_face = -1;
+    if (cv->v0 >= 0 && hoc_dist3(x, m->vertices[cv->v0].xyz) > tol)
+      tol = hoc_dist3(x, m->vertices[cv->v0].xyz), at_curve = cv->tag, at_face = -1;
+    if (cv->v1 >= 0 && hoc_dist3(x + 3, m->vertices[cv->v1].xyz) > tol)
+      tol = hoc_dist3(x + 3, m->vertices[cv->v1].xyz), at_curve = cv->tag, at_face = -1;
   }
   m->tolerance = tol;
   m->tolerance_curve = at_curve;
@@ -341,7 +337,7 @@ hoc_status hoc_cad_face_invert(const hoc_model *m, int face, const double xyz[3]
   const hoc_cad_face *f = &m->faces[face];
   double x[3], du[3], dv[3];
   HOC_TRY(hoc_cad_face_eval(m, face, 1, uv, x, du, dv));
-  double d = dist3(x, xyz);
+  double d = hoc_dist3(x, xyz);
   double stop = 1e-15 * m->diagonal;
   double mu = 0;
   for (int it = 0; it < 60 && d > stop; ++it) {
@@ -369,7 +365,7 @@ hoc_status hoc_cad_face_invert(const hoc_model *m, int face, const double xyz[3]
                          clamp_param(uv[1] + s1, f->lo[1], f->hi[1], f->period[1])};
       double xt[3], dut[3], dvt[3];
       HOC_TRY(hoc_cad_face_eval(m, face, 1, trial, xt, dut, dvt));
-      double dt = dist3(xt, xyz);
+      double dt = hoc_dist3(xt, xyz);
       if (dt < d) {
         uv[0] = trial[0];
         uv[1] = trial[1];
@@ -397,7 +393,7 @@ hoc_status hoc_cad_curve_invert(const hoc_model *m, int curve, const double xyz[
   const hoc_cad_curve *c = &m->curves[curve];
   double x[3], dx[3];
   HOC_TRY(hoc_cad_curve_eval(m, curve, 1, t, x, dx));
-  double d = dist3(x, xyz);
+  double d = hoc_dist3(x, xyz);
   double stop = 1e-15 * m->diagonal;
   for (int it = 0; it < 60 && d > stop; ++it) {
     double a = dx[0] * dx[0] + dx[1] * dx[1] + dx[2] * dx[2];
@@ -408,7 +404,7 @@ hoc_status hoc_cad_curve_invert(const hoc_model *m, int curve, const double xyz[
     for (int tries = 0; tries < 30 && !accepted; ++tries, step *= 0.5) {
       double tt = clamp_param(*t + step, c->lo, c->hi, c->period), xt[3], dxt[3];
       HOC_TRY(hoc_cad_curve_eval(m, curve, 1, &tt, xt, dxt));
-      double dt = dist3(xt, xyz);
+      double dt = hoc_dist3(xt, xyz);
       if (dt < d) {
         *t = tt;
         memcpy(x, xt, sizeof x);

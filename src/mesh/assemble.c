@@ -2,6 +2,7 @@
  * slots (node seen from a face), curve lines, face orientation; the
  * unwrapped element parameters and pole slots are in poles.c.
  * SPDX-License-Identifier: GPL-2.0-or-later */
+#include "core/geometry.h"
 #include "core/hash.h"
 #include "mesh/mesh.h"
 
@@ -29,11 +30,6 @@ double hoc_mesh_face_gap(const hoc_mesh *mesh) { return mesh ? mesh->face_gap : 
 
 /* Index of the first node of local edge k (0..2) in gmsh ordering. */
 static inline int edge_first_node(int p, int k) { return 3 + k * (p - 1); }
-
-static double dist3(const double *a, const double *b) {
-  double dx = a[0] - b[0], dy = a[1] - b[1], dz = a[2] - b[2];
-  return sqrt(dx * dx + dy * dy + dz * dz);
-}
 
 static size_t node_label(const hoc_mesh_source *src, size_t i) {
   return src->node_tag ? src->node_tag[i] : i + 1;
@@ -463,7 +459,7 @@ static hoc_status slot_params(hoc_mesh *m, const hoc_mesh_source *src, double to
       HOC_TRY_GOTO(hoc_cad_face_invert(model, f, m->xyz + 3 * i, p, &d), done);
     } else if (isfinite(p[0]) && isfinite(p[1])) {
       HOC_TRY_GOTO(hoc_cad_face_eval(model, f, 1, p, x, NULL, NULL), done);
-      d = dist3(x, m->xyz + 3 * i);
+      d = hoc_dist3(x, m->xyz + 3 * i);
     }
     if (d > tol) {
       if (!(isfinite(p[0]) && isfinite(p[1])))
@@ -529,7 +525,7 @@ static int end_param(const hoc_mesh *m, size_t i, int c, double near, double *t)
     return 0;
   }
   const double *v = m->model->vertices[m->entity[i]].xyz;
-  double d0 = dist3(x, v), d1 = dist3(x + 3, v), tol = hoc_mesh_collapse_distance(m->model);
+  double d0 = hoc_dist3(x, v), d1 = hoc_dist3(x + 3, v), tol = hoc_mesh_collapse_distance(m->model);
   if (d0 <= tol && d1 <= tol && !isnan(near))
     *t = fabs(near - cv->lo) <= fabs(near - cv->hi) ? cv->lo : cv->hi;
   else if (d0 <= tol || d1 <= tol)
@@ -813,7 +809,7 @@ static hoc_status assemble(hoc_model *model, const hoc_mesh_source *src, double 
   }
   if (given) {
     for (size_t i = 0; i < src->n_nodes; ++i) {
-      double d = dist3(given + 3 * i, m->xyz + 3 * i);
+      double d = hoc_dist3(given + 3 * i, m->xyz + 3 * i);
       if (d > m->off_cad) m->off_cad = d;
       if (!src->given) continue; /* hocad's own: positions and parameters from one kernel */
       double allowed = m->dim[i] == HOC_ON_FACE && !corner[i] ? tol : limit;

@@ -11,6 +11,7 @@
  * for a marked side; the pole slots (poles.c) then give each element
  * around it its own parameters there.
  * SPDX-License-Identifier: GPL-2.0-or-later */
+#include "core/geometry.h"
 #include "mesh/mesh.h"
 
 #include <math.h>
@@ -33,11 +34,6 @@ static size_t find(size_t *up, size_t i) {
     i = up[i];
   }
   return i;
-}
-
-static double dist3(const double *a, const double *b) {
-  return sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) +
-              (a[2] - b[2]) * (a[2] - b[2]));
 }
 
 /* The point of node i (its given position, else its entity's). */
@@ -114,7 +110,7 @@ hoc_status hoc_mesh_collapse_sides(const hoc_model *model, hoc_mesh_source *src,
       }
       HOC_TRY_GOTO(node_point(model, src, i, x), done);
       HOC_TRY_GOTO(node_point(model, src, first[k], y), done);
-      if (!(dist3(x, y) <= tol)) continue;
+      if (!(hoc_dist3(x, y) <= tol)) continue;
       size_t a = find(up, i), b = find(up, first[k]);
       if (a == b) continue;
       /* the root: a vertex node if there is one, else the first node */

@@ -3,6 +3,7 @@
  * every free node's position.
  * SPDX-License-Identifier: GPL-2.0-or-later
  */
+#include "core/geometry.h"
 #include "optimize/optimize_impl.h"
 #include "optimize/tunables.h"
 
@@ -51,11 +52,6 @@ void hoc_opt_csr_finish_counts(size_t n, size_t *start) {
 void hoc_opt_csr_restore(size_t n, size_t *start) {
   for (size_t i = n; i > 0; --i) start[i] = start[i - 1];
   start[0] = 0;
-}
-
-static double dist3(const double *a, const double *b) {
-  return sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) +
-              (a[2] - b[2]) * (a[2] - b[2]));
 }
 
 /* elem[ne] grown by `rings` rings of elements (sharing a node); node[nn]
@@ -229,7 +225,7 @@ hoc_status hoc_opt_setup(hoc_opt *o, hoc_mesh *m, hoc_measure measure, int fix_c
     const size_t *cn = m->conn + e * np;
     double h = 0;
     for (int k = 0; k < 3; ++k)
-      h = fmax(h, dist3(m->xyz + 3 * cn[k], m->xyz + 3 * cn[(k + 1) % 3]));
+      h = fmax(h, hoc_dist3(m->xyz + 3 * cn[k], m->xyz + 3 * cn[(k + 1) % 3]));
     o->adj.elem_h[e] = h;
   }
   for (int f = 0; f < 2; ++f)

@@ -1,0 +1,15 @@
+/* Small geometric helpers shared by the mesh, the CAD layer and the
+ * optimiser.
+ * SPDX-License-Identifier: GPL-2.0-or-later */
+#ifndef HOC_CORE_GEOMETRY_H
+#define HOC_CORE_GEOMETRY_H
+
+#include <math.h>
+
+/* Euclidean distance between points a[3] and b[3]. */
+static inline double hoc_dist3(const double *a, const double *b) {
+  double dx = a[0] - b[0], dy = a[1] - b[1], dz = a[2] - b[2];
+  return sqrt(dx * dx + dy * dy + dz * dz);
+}
+
+#endif
