@@ -601,9 +601,9 @@ typedef struct hoc_report hoc_report;
  *  elements tangled. (1) A linear mesh (hoc_mesh_generate_linear, or
  *  options->linear), (2) raised to the order (hoc_mesh_elevate), (3)
  *  optimised (hoc_mesh_optimize; unless options->optimize is 0, and from
- *  order 2). Where elements stay tangled: first their
- *  split on a copy (as hoc_mesh_repair splits), kept if it leaves none
- *  tangled; else their faces meshed again with edges half as long and
+ *  order 2). Where elements stay tangled: first (below order 6, or where
+ *  their faces fold) their split on a copy (as hoc_mesh_repair splits),
+ *  kept if it leaves none tangled; else their faces meshed again with edges half as long and
  *  (unless options->size_min is set) a minimum size ten times smaller,
  *  unless that more than quadruples the mesh, and everything again, at
  *  most `refinements` times; once that is spent, the attempt with the

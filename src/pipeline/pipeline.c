@@ -300,12 +300,16 @@ static hoc_status mesh_model_run(const hoc_run *run, hoc_model *model, model_mes
     /* first the local repair, on a copy: splitting the tangled elements
      * (as below, once remeshing is spent) keeps the rest of the mesh; it
      * is kept if it leaves none tangled (the bottle at order 2: two
-     * elements at its thread's end, which two remeshings only make worse) */
+     * elements at its thread's end, which two remeshings only make worse).
+     * From HOC_PIPELINE_REMESH_FIRST_FROM on, the remeshing comes first
+     * unless the faces fold (see there) */
     int split_done = 0, across_folds = 0;
     HOC_TRY_GOTO(hoc_repair_tangled_on_folds(run, m->ho, &across_folds), done);
-    status = hoc_repair_split_first(run, r, &m->ho, across_folds, &split_done);
-    *final = m->ho;
-    if (status != HOC_OK || split_done) break;
+    if (across_folds || o->order < HOC_PIPELINE_REMESH_FIRST_FROM) {
+      status = hoc_repair_split_first(run, r, &m->ho, across_folds, &split_done);
+      *final = m->ho;
+      if (status != HOC_OK || split_done) break;
+    }
     hoc_stages attempt_r = *r;
     HOC_TRY_GOTO(hoc_repair_refine_faces(run, r, model, m->lin, m->ho, &face_size), done);
     /* and unless size_min was given, let the curvature sizing go ten

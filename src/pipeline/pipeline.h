@@ -46,6 +46,20 @@
  * optimisation leaves elements tangled, the direct raise is used. */
 #define HOC_PIPELINE_COARSE_FROM 6
 #define HOC_PIPELINE_COARSE_ORDER 3
+/* From this order on, tangled elements left on faces that do not fold
+ * have their faces meshed again before any split (hocad mesh, rule 4).
+ * At such orders they are elements in which the surface bends more than
+ * order p follows: their coarse optimum is valid, raised to p they fold
+ * between their nodes. Split children, placed straight in the parent's
+ * (u, v), fold again, and each split's local optimisation tests every
+ * step exactly (one to three seconds per sweep at orders 8 to 10); a
+ * remeshing lets the curvature sizing go finer and starts again at the
+ * coarse order, where optimising is cheap. At order 8 (split first ->
+ * remesh first): the D150 airliner 0 tangled but min q 0.0008 < 0.9 x
+ * linear in 205 s -> bounds met in 160 s; wing_fuselage no result in
+ * 480 s -> 1 tangled in 280 s; t106_turbine_blade 2 tangled in 830 s ->
+ * 2 in 390 s. */
+#define HOC_PIPELINE_REMESH_FIRST_FROM HOC_PIPELINE_COARSE_FROM
 /* A split of an optimised mesh is optimised locally: only the nodes of the
  * split's children and of HOC_PIPELINE_LOCAL_RINGS rings of elements
  * around them move (the rest of the mesh is where the first optimisation
