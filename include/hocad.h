@@ -603,9 +603,10 @@ typedef struct hoc_report hoc_report;
  *  optimised (hoc_mesh_optimize; unless options->optimize is 0, and from
  *  order 2). Where elements stay tangled: first (below order 6, or where
  *  their faces fold) their split on a copy (as hoc_mesh_repair splits),
- *  kept if it leaves none tangled; else their faces meshed again with edges half as long and
- *  (unless options->size_min is set) a minimum size ten times smaller,
- *  unless that more than quadruples the mesh, and everything again, at
+ *  kept if it leaves none tangled; else their faces meshed again with
+ *  edges half as long and (unless options->size_min is set) a minimum
+ *  size ten times smaller, unless that more than quadruples the mesh,
+ *  and everything again, at
  *  most `refinements` times; once that is spent, the attempt with the
  *  fewest tangled elements split. An untangled result with elements below
  *  0.9 x the linear mesh's min q has them and two rings around them

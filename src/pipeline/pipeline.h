@@ -56,9 +56,11 @@
  * remeshing lets the curvature sizing go finer and starts again at the
  * coarse order, where optimising is cheap. At order 8 (split first ->
  * remesh first): the D150 airliner 0 tangled but min q 0.0008 < 0.9 x
- * linear in 205 s -> bounds met in 160 s; wing_fuselage no result in
- * 480 s -> 1 tangled in 280 s; t106_turbine_blade 2 tangled in 830 s ->
- * 2 in 390 s. */
+ * linear in 205 s -> bounds met in 169 s; wing_fuselage no result in
+ * 480 s -> 1 tangled in 363 s; t106_turbine_blade 2 tangled in 830 s ->
+ * 2 in 352 s. It costs more where a few local splits were enough:
+ * fuselage_occ28366 at order 10, met in 446 s -> no result in 600 s
+ * (each remeshing repeats a whole order-10 optimisation). */
 #define HOC_PIPELINE_REMESH_FIRST_FROM HOC_PIPELINE_COARSE_FROM
 /* A split of an optimised mesh is optimised locally: only the nodes of the
  * split's children and of HOC_PIPELINE_LOCAL_RINGS rings of elements
