@@ -123,16 +123,37 @@ static void step(int m, const double *in, const double w[3], double *out) {
     }
 }
 
+/* The corner of the parent that barycentric point w is, or -1. */
+static int corner_of(const double w[3]) {
+  for (int c = 0; c < 3; ++c)
+    if (w[c] == 1 && w[(c + 1) % 3] == 0 && w[(c + 2) % 3] == 0) return c;
+  return -1;
+}
+
 /* The net of degree m on the child triangle with corners W[0..2]
  * (barycentric in the parent): coefficient (a0, a1, a2) is the blossom
- * at W0 a0 times, W1 a1 times, W2 a2 times. */
+ * at W0 a0 times, W1 a1 times, W2 a2 times.
+ * The blossom is symmetric, so its arguments may come in any order: the
+ * outer loops step with two of the W (outer, then middle) and the inner
+ * one reduces the rest with the third W to one coefficient, O(deg^3) for
+ * each of the O(m^2) coefficients. Where a W is a corner of the parent
+ * (three of the four children have one), a step with it only shifts the
+ * net's indices, so it goes innermost and its reduction is a pick of one
+ * coefficient: O(m^4) for the whole net instead of O(m^5). The other two
+ * keep their order (W2 before W1 before W0), and a shift commutes exactly
+ * with the steps, so every coefficient is the same number either way. */
 static void restrict_net(int m, const double *in, const double W[3][3], double *out) {
+  int inner = 0, corner = -1;
+  for (int i = 2; i >= 0 && corner < 0; --i)
+    if ((corner = corner_of(W[i])) >= 0) inner = i;
+  /* the other two, in the order W2, W1, W0 */
+  int outer = inner == 2 ? 1 : 2, middle = inner == 0 ? 1 : 0;
   double buf[4][NET_P * 3];
   const double *n2 = in;
   int b2 = 0;
   for (int k = 0; k <= m; ++k) {
     if (k) {
-      step(m - k + 1, n2, W[2], buf[b2]);
+      step(m - k + 1, n2, W[outer], buf[b2]);
       n2 = buf[b2];
       b2 ^= 1;
     }
@@ -140,18 +161,27 @@ static void restrict_net(int m, const double *in, const double W[3][3], double *
     int b1 = 2;
     for (int j = 0; j + k <= m; ++j) {
       if (j) {
-        step(m - k - j + 1, n1, W[1], buf[b1]);
+        step(m - k - j + 1, n1, W[middle], buf[b1]);
         n1 = buf[b1];
         b1 ^= 1; /* 2 <-> 3 */
       }
-      /* W0 down to one coefficient, in place (each step reads only
+      int deg = m - k - j, a[3];
+      a[outer] = k;
+      a[middle] = j;
+      a[inner] = deg;
+      double *o = out + 3 * ix(m, a[1], a[2]);
+      if (corner >= 0) {
+        /* deg steps at the corner: the coefficient deg times toward it */
+        memcpy(o, n1 + 3 * ix(deg, corner == 1 ? deg : 0, corner == 2 ? deg : 0), 3 * sizeof *o);
+        continue;
+      }
+      /* W[inner] down to one coefficient, in place (each step reads only
        * coefficients it has not yet overwritten) */
-      int deg = m - k - j;
       double v[3 * (MAXP + 1) * (MAXP + 2) / 2];
       memcpy(v, n1, (size_t)(3 * ix(deg, 0, deg + 1)) * sizeof *v);
       for (int i = deg; i > 0; --i)
-        step(i, v, W[0], v);
-      memcpy(out + 3 * ix(m, j, k), v, 3 * sizeof *v);
+        step(i, v, W[inner], v);
+      memcpy(o, v, 3 * sizeof *v);
     }
   }
 }
