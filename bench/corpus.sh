@@ -3,12 +3,13 @@
 # markdown table row per run of `hocad mesh MODEL --order P`: elements,
 # tangled after raising and at the end (the exact test), min and mean q of
 # the linear mesh -> the final one, bounds met, wall seconds, the seconds of
-# the CAD import and gmsh's linear meshing, hocad's own seconds per 10^4
-# elements, peak memory, exit code. Orders 2 3 5, and 10 for each
-# model whose order-5 run took under --limit seconds. Then the models of
-# hard/ (gmsh itself fails on them): one row each, which must be a clean
-# non-zero exit with a message, never a signal or a timeout. Last, a
-# summary: runs, bounds met, the failures.
+# the process start (loading gmsh's and OpenCASCADE's shared libraries,
+# the least of three `hocad --version`), the CAD import and gmsh's linear
+# meshing, hocad's own seconds per 10^4 elements, peak memory, exit code.
+# Orders 2 3 5, and 10 for each model whose order-5 run took under --limit
+# seconds. Then the models of hard/ (gmsh itself fails on them): one row
+# each, which must be a clean non-zero exit with a message, never a signal
+# or a timeout. Last, a summary: runs, bounds met, the failures.
 #
 # usage: bench/corpus.sh [--orders "2 3 5"] [--limit S] [--threads N]
 #                        [--timeout S] [--hocad HOCAD] [--cad-check] [MODELS...]
@@ -95,14 +96,21 @@ one_run() {
   runs=$((runs + 1))
   if "$py" "$line" run --model "$name" --order "$p" --exit "$rc" --wall "$wall" \
     --rss-kb "$(tail -n 1 "$work/time" | cut -d' ' -f2)" --json "$work/r.json" \
-    --stderr "$work/err" --timeout "$tmo" --why "$work/why" "${cadf[@]}"; then
+    --stderr "$work/err" --timeout "$tmo" --why "$work/why" --startup "$startup" "${cadf[@]}"; then
     met=$((met + 1))
   else
     failures+=("$name p$p: $(cat "$work/why" 2>/dev/null)")
   fi
 }
 
+# the process start: `hocad --version` only loads the shared libraries
+startup=$(for i in 1 2 3; do
+  /usr/bin/time -f %e "$hocad" --version 2>&1 > /dev/null | tail -n 1
+done | sort -n | head -n 1)
+[ -n "$startup" ] || startup=0
 bench_header "${args[@]}"
+echo "Process start (loading gmsh's and OpenCASCADE's libraries): $startup s, in \`CAD + linear s\`."
+echo
 if [ ${#normal[@]} -gt 0 ]; then
   "$py" "$line" header
   for m in "${normal[@]}"; do
