@@ -98,6 +98,13 @@ typedef struct weights {
   const double *w1, *w3; /* d1 x d2 (degrees p - 1, p - 1); c . n (degrees 2p - 2, p) */
 } weights;
 
+/* The corner of the parent that barycentric point w is, or -1. */
+static int corner_of(const double w[3]) {
+  for (int c = 0; c < 3; ++c)
+    if (w[c] == 1 && w[(c + 1) % 3] == 0 && w[(c + 2) % 3] == 0) return c;
+  return -1;
+}
+
 /* One de Casteljau step of a net of 3-vectors of degree m at the point w
  * (barycentric): out, of degree m - 1. */
 static void step(int m, const double *in, const double w[3], double *out) {
@@ -105,8 +112,8 @@ static void step(int m, const double *in, const double w[3], double *out) {
    * edge midpoints) the step only picks coefficients: the terms with
    * weight 0 add a zero, which changes no value but a zero's sign, and
    * that no comparison of the test sees */
-  for (int c = 0; c < 3; ++c) {
-    if (w[c] != 1 || w[(c + 1) % 3] != 0 || w[(c + 2) % 3] != 0) continue;
+  int c = corner_of(w);
+  if (c >= 0) {
     int dj = c == 1, dk = c == 2;
     for (int k = 0; k < m; ++k)
       for (int j = 0; j + k < m; ++j)
@@ -121,13 +128,6 @@ static void step(int m, const double *in, const double w[3], double *out) {
       for (int d = 0; d < 3; ++d)
         o[d] = w[0] * a0[d] + w[1] * a1[d] + w[2] * a2[d];
     }
-}
-
-/* The corner of the parent that barycentric point w is, or -1. */
-static int corner_of(const double w[3]) {
-  for (int c = 0; c < 3; ++c)
-    if (w[c] == 1 && w[(c + 1) % 3] == 0 && w[(c + 2) % 3] == 0) return c;
-  return -1;
 }
 
 /* The net of degree m on the child triangle with corners W[0..2]
