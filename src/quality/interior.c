@@ -106,20 +106,10 @@ static int corner_of(const double w[3]) {
 }
 
 /* One de Casteljau step of a net of 3-vectors of degree m at the point w
- * (barycentric): out, of degree m - 1. */
+ * (barycentric): out, of degree m - 1; out may be in (each coefficient
+ * reads only coefficients not yet overwritten). restrict_net never steps
+ * at a corner of the parent: it picks there instead. */
 static void step(int m, const double *in, const double w[3], double *out) {
-  /* at a corner of the parent (the children's corners are corners and
-   * edge midpoints) the step only picks coefficients: the terms with
-   * weight 0 add a zero, which changes no value but a zero's sign, and
-   * that no comparison of the test sees */
-  int c = corner_of(w);
-  if (c >= 0) {
-    int dj = c == 1, dk = c == 2;
-    for (int k = 0; k < m; ++k)
-      for (int j = 0; j + k < m; ++j)
-        memmove(out + 3 * ix(m - 1, j, k), in + 3 * ix(m, j + dj, k + dk), 3 * sizeof *out);
-    return;
-  }
   for (int k = 0; k < m; ++k)
     for (int j = 0; j + k < m; ++j) {
       const double *a0 = in + 3 * ix(m, j, k), *a1 = in + 3 * ix(m, j + 1, k),
@@ -171,7 +161,9 @@ static void restrict_net(int m, const double *in, const double W[3][3], double *
       a[inner] = deg;
       double *o = out + 3 * ix(m, a[1], a[2]);
       if (corner >= 0) {
-        /* deg steps at the corner: the coefficient deg times toward it */
+        /* deg steps at the corner: the coefficient deg times toward it
+         * (stepping would add terms of weight 0: the same values, but
+         * for a zero's sign, which no comparison of the test sees) */
         memcpy(o, n1 + 3 * ix(deg, corner == 1 ? deg : 0, corner == 2 ? deg : 0), 3 * sizeof *o);
         continue;
       }
