@@ -599,7 +599,11 @@ typedef struct hoc_report hoc_report;
 
 /** `hocad mesh`: the paper's three steps and the repairs where they leave
  *  elements tangled. (1) A linear mesh (hoc_mesh_generate_linear, or
- *  options->linear), (2) raised to the order (hoc_mesh_elevate), (3)
+ *  options->linear), (2) raised to the order (hoc_mesh_elevate; per face,
+ *  where it tangles fewer elements or raises the face's min q by over 1%,
+ *  the new nodes at the feet of the straight elements' points on the
+ *  surface instead: faces whose parametrisation varies within an element,
+ *  as at a knot where a B-spline's derivative jumps), (3)
  *  optimised (hoc_mesh_optimize; unless options->optimize is 0, and from
  *  order 2). Where elements stay tangled: first (below order 6, or where
  *  their faces fold) their split on a copy (as hoc_mesh_repair splits),

@@ -140,6 +140,20 @@ hoc_status hoc_cad_face_invert(const hoc_model *model, int face, const double xy
 hoc_status hoc_cad_curve_invert(const hoc_model *model, int curve, const double xyz[3],
                                 double *t, double *dist);
 
+/** Foot of the perpendicular from a point off the face, near a guess: uv
+ *  (in: guess, out: result) by Gauss-Newton steps (each halved up to 8
+ *  times until it brings phi(uv) closer to xyz), until a step moves the
+ *  point by less than tol (at least 1e-14 of the model's diagonal), at
+ *  most 20 steps.
+ *  Stays on the guess's unwrapped copy and within the face's bounds.
+ *  Unlike hoc_cad_face_invert it expects xyz off the surface and stops
+ *  once the residual is normal to it: a handful of evaluations. */
+hoc_status hoc_cad_face_foot(const hoc_model *model, int face, const double xyz[3], double tol,
+                             double uv[2]);
+/** Same on a curve: t in/out. */
+hoc_status hoc_cad_curve_foot(const hoc_model *model, int curve, const double xyz[3], double tol,
+                              double *t);
+
 /** Wrap a face parameter pair into range along its closed directions. */
 void hoc_cad_face_wrap(const hoc_cad_face *f, double uv[2]);
 
@@ -162,9 +176,13 @@ typedef enum hoc_analytic_kind {
   HOC_ANALYTIC_CONE,     /* base radius a, height b, apex at the origin: phi = (k v cos u,
                             k v sin u, v) with k = a / b, u in [0,2pi], v in [0,b]; its apex is a
                             pole where the normal depends on the direction of approach */
-  HOC_ANALYTIC_FOLD      /* a square [0,a]^2 that folds along v = b (0 < b < a): phi = (u,
+  HOC_ANALYTIC_FOLD,     /* a square [0,a]^2 that folds along v = b (0 < b < a): phi = (u,
                             w^2, w^3), w = v - b; phi_u x phi_v = (0, -3w^2, 2w) vanishes on
                             the fold and reverses across it (a cuspidal edge) */
+  HOC_ANALYTIC_KINK      /* the square [0,a]^2 of a plane whose u runs four times slower past
+                            u = b (0 < b < a), as at a B-spline knot where the derivative
+                            jumps: phi = (g(u), v, 0), g(u) = u below b, b + (u - b) / 4 above;
+                            flat, its parametrisation only C0 */
 } hoc_analytic_kind;
 
 /** One analytic face (tag 1) with its seam/pole curves and vertices, thread-safe. */

@@ -49,6 +49,12 @@ static void face_point(const analytic *s, double u, double v, double *x, double 
     U[0] = -k * v * su, U[1] = k * v * cu, U[2] = 0;
     V[0] = k * cu, V[1] = k * su, V[2] = 1;
   } break;
+  case HOC_ANALYTIC_KINK: {
+    double slope = u > b ? 0.25 : 1.0; /* the right derivative at the knot */
+    X[0] = u > b ? b + (u - b) * slope : u, X[1] = v, X[2] = 0;
+    U[0] = slope, U[1] = 0, U[2] = 0;
+    V[0] = 0, V[1] = 1, V[2] = 0;
+  } break;
   case HOC_ANALYTIC_FOLD: {
     double w = v - b;
     X[0] = u, X[1] = w * w, X[2] = w * w * w;
@@ -114,6 +120,10 @@ static void face_inverse(const analytic *s, const double *x, double *uv) {
   switch (s->kind) {
   case HOC_ANALYTIC_PLANE:
     uv[0] = x[0];
+    uv[1] = x[1];
+    break;
+  case HOC_ANALYTIC_KINK:
+    uv[0] = x[0] > s->b ? s->b + 4 * (x[0] - s->b) : x[0];
     uv[1] = x[1];
     break;
   case HOC_ANALYTIC_FOLD:
@@ -199,13 +209,14 @@ hoc_status hoc_cad_create_analytic(hoc_analytic_kind kind, double a, double b,
   HOC_CHECK(isfinite(a) && a > 0, HOC_ERR_ARGUMENT, "analytic surface size must be > 0");
   HOC_CHECK(kind == HOC_ANALYTIC_PLANE || kind == HOC_ANALYTIC_SPHERE ||
                 (isfinite(b) && b > 0 && (kind != HOC_ANALYTIC_TORUS || b < a) &&
-                 (kind != HOC_ANALYTIC_FOLD || b < a)),
+                 ((kind != HOC_ANALYTIC_FOLD && kind != HOC_ANALYTIC_KINK) || b < a)),
             HOC_ERR_ARGUMENT, "invalid second size of the analytic surface");
   const double pi = 0.5 * TWO_PI;
   int nc = 0, nv = 0;
   switch (kind) {
   case HOC_ANALYTIC_PLANE: nc = 4, nv = 4; break;
   case HOC_ANALYTIC_FOLD: nc = 4, nv = 4; break;
+  case HOC_ANALYTIC_KINK: nc = 4, nv = 4; break;
   case HOC_ANALYTIC_SPHERE: nc = 3, nv = 2; break;
   case HOC_ANALYTIC_CYLINDER: nc = 3, nv = 2; break;
   case HOC_ANALYTIC_CONE: nc = 3, nv = 2; break;
@@ -231,7 +242,11 @@ hoc_status hoc_cad_create_analytic(hoc_analytic_kind kind, double a, double b,
   switch (kind) {
   case HOC_ANALYTIC_PLANE:
   case HOC_ANALYTIC_FOLD:
-    snprintf(f->type, sizeof f->type, kind == HOC_ANALYTIC_PLANE ? "Plane" : "Folded square");
+  case HOC_ANALYTIC_KINK:
+    snprintf(f->type, sizeof f->type, "%s",
+             kind == HOC_ANALYTIC_PLANE  ? "Plane"
+             : kind == HOC_ANALYTIC_FOLD ? "Folded square"
+                                         : "Plane with a knot");
     f->lo[0] = f->lo[1] = 0;
     f->hi[0] = f->hi[1] = a;
     set_curve(m, 0, 0, a, 0, 1, s, 0, 0, 1, 0);  /* v = 0 */
@@ -243,6 +258,7 @@ hoc_status hoc_cad_create_analytic(hoc_analytic_kind kind, double a, double b,
     face_point(s, a, a, m->vertices[2].xyz, NULL, NULL);
     face_point(s, 0, a, m->vertices[3].xyz, NULL, NULL);
     m->bbox[3] = m->bbox[4] = a;
+    if (kind == HOC_ANALYTIC_KINK) m->bbox[3] = b + 0.25 * (a - b);
     if (kind == HOC_ANALYTIC_FOLD) { /* x = u, y = w^2, z = w^3 with w in [-b, a - b] */
       m->bbox[4] = fmax(b * b, (a - b) * (a - b));
       m->bbox[2] = -b * b * b, m->bbox[5] = (a - b) * (a - b) * (a - b);

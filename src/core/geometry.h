@@ -12,4 +12,9 @@ static inline double hoc_dist3(const double *a, const double *b) {
   return sqrt(dx * dx + dy * dy + dz * dz);
 }
 
+/* Dot product of a[3] and b[3]. */
+static inline double hoc_dot3(const double *a, const double *b) {
+  return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
 #endif

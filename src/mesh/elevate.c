@@ -3,11 +3,13 @@
  * placed in the curve's parameter, then mapped onto the CAD.
  * SPDX-License-Identifier: GPL-2.0-or-later */
 #include "basis/basis.h"
+#include "core/geometry.h"
 #include "core/hash.h"
 #include "mesh/mesh.h"
 
 #include <math.h>
 #include <stdint.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -198,7 +200,49 @@ static hoc_status cusp_grading(const hoc_mesh *in, const size_t *elem_edge, cons
  * other nodes in the face's (u,v), unwrapped per element. From a linear
  * mesh this is the paper's placement (straight in (u,v)); from a curved mesh
  * it keeps the curved geometry. */
-static hoc_status reinterpolate(const hoc_mesh *in, int p, hoc_nodeset set, hoc_mesh **out) {
+/* Targets of the new nodes: the source element's point in space. */
+typedef struct foot_targets {
+  double *xyz;         /* [cap][3] */
+  double *tol;         /* [cap] how close: a millionth of the source element's longest edge */
+  unsigned char *want; /* [cap] 1 where the node may go to the foot of its target */
+  size_t cap;
+} foot_targets;
+
+static void foot_set(foot_targets *t, size_t node, int n, const double *w, const double *xyz,
+                     const size_t *nodes, double tol) {
+  if (node >= t->cap) return; /* beyond the reserve: keeps its parameter-space place */
+  double *x = t->xyz + 3 * node;
+  x[0] = x[1] = x[2] = 0;
+  for (int i = 0; i < n; ++i)
+    for (int d = 0; d < 3; ++d) x[d] += w[i] * xyz[3 * nodes[i] + (size_t)d];
+  t->want[node] = 1;
+  t->tol[node] = tol;
+}
+
+/* Each flagged node moves to the foot of the perpendicular from its target,
+ * starting from its parameter-space place; in parallel, each node alone. */
+static hoc_status foot_move(const hoc_model *model, const foot_targets *t, hoc_node_builder *b) {
+  size_t n = b->n < t->cap ? b->n : t->cap;
+  hoc_par_error err = {0};
+#pragma omp parallel for schedule(dynamic, 256) if (n > 256 && model->thread_safe)
+  for (size_t i = 0; i < n; ++i) {
+    if (!t->want[i]) continue;
+    hoc_status st;
+    double *par = b->par + 2 * i;
+    if (b->dim[i] == HOC_ON_CURVE) {
+      st = hoc_cad_curve_foot(model, b->ent[i], t->xyz + 3 * i, t->tol[i], &par[0]);
+      par[0] = wrap_t(&model->curves[b->ent[i]], par[0]);
+    } else {
+      st = hoc_cad_face_foot(model, b->ent[i], t->xyz + 3 * i, t->tol[i], par);
+      hoc_cad_face_wrap(&model->faces[b->ent[i]], par);
+    }
+    if (st != HOC_OK) hoc_par_error_catch(&err, st);
+  }
+  return hoc_par_error_raise(&err);
+}
+
+static hoc_status reinterpolate(const hoc_mesh *in, int p, hoc_nodeset set,
+                                const unsigned char *face_foot, hoc_mesh **out) {
   const hoc_model *model = in->model;
   int np = hoc_tri_num_nodes(p), npi = in->np, pin = in->order;
   size_t ne = in->n_elems;
@@ -210,6 +254,8 @@ static hoc_status reinterpolate(const hoc_mesh *in, int p, hoc_nodeset set, hoc_
   int *lcurve = NULL;
   hoc_lagrange *basis = NULL;
   hoc_node_builder b = {0};
+  foot_targets foot = {0};
+  unsigned char *curve_foot = NULL;
   size_t *edge_line = NULL, *line_edge = NULL, n_edges = 0;
   hoc_status status = HOC_OK;
   HOC_ALLOC_GOTO(rs, 2 * (size_t)np, done);
@@ -244,6 +290,23 @@ static hoc_status reinterpolate(const hoc_mesh *in, int p, hoc_nodeset set, hoc_
   HOC_TRY_GOTO(hoc_node_builder_reserve(&b, in->n_nodes + n_edges * (size_t)(p - 1) +
                                                 ne * (size_t)(np - 3 * p)),
                done);
+  if (face_foot) {
+    foot.cap = b.cap;
+    HOC_ALLOC_GOTO(foot.xyz, 3 * foot.cap, done);
+    HOC_ALLOC_GOTO(foot.tol, foot.cap, done);
+    foot.want = hoc_calloc(foot.cap + 1, 1);
+    curve_foot = hoc_calloc((size_t)model->n_curves + 1, 1);
+    if (!foot.want || !curve_foot) {
+      status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
+      goto done;
+    }
+    /* a curve's nodes go to the foot where a face along it does */
+    for (size_t e = 0; e < ne; ++e)
+      for (int k = 0; k < 3 && face_foot[in->elem_face[e]]; ++k) {
+        size_t l = edge_line[elem_edge[3 * e + (size_t)k]];
+        if (l != SIZE_MAX) curve_foot[in->line_curve[l]] = 1;
+      }
+  }
   /* vertices keep their classification and parameters */
   for (size_t e = 0; e < ne; ++e)
     for (int k = 0; k < 3; ++k) {
@@ -261,6 +324,14 @@ static hoc_status reinterpolate(const hoc_mesh *in, int p, hoc_nodeset set, hoc_
     const size_t *sl = in->elem_slot + e * (size_t)npi;
     const double *euv = in->elem_uv + 2 * e * (size_t)npi;
     size_t *out_cn = conn + e * (size_t)np;
+    /* nodes at the feet of the source element's points, except at a pole,
+     * whose arbitrary coordinate follows the rules below */
+    int to_foot = face_foot && face_foot[f];
+    double tol = 0;
+    for (int k = 0; k < 3 && face_foot; ++k)
+      tol = fmax(tol, 1e-6 * hoc_dist3(in->xyz + 3 * cn[k], in->xyz + 3 * cn[(k + 1) % 3]));
+    for (int i = 0; i < npi; ++i) to_foot &= in->slot_pole[sl[i]] == 0;
+    size_t lnodes[HOC_MAX_ORDER + 1];
     for (int k = 0; k < 3 && p > 1; ++k) {
       int ka = k, kb = (k + 1) % 3;
       size_t a = cn[ka], id = elem_edge[3 * e + (size_t)k];
@@ -279,6 +350,7 @@ static hoc_status reinterpolate(const hoc_mesh *in, int p, hoc_nodeset set, hoc_
       loc[0] = ka;
       loc[pin] = kb;
       for (int j = 0; j < pin - 1; ++j) loc[1 + j] = 3 + k * (pin - 1) + j;
+      for (int j = 0; j <= pin; ++j) lnodes[j] = cn[loc[j]];
       size_t l = edge_line[id];
       if (l != SIZE_MAX) {
         /* on a CAD curve: interpolate t along the edge */
@@ -306,6 +378,7 @@ static hoc_status reinterpolate(const hoc_mesh *in, int p, hoc_nodeset set, hoc_
           double t = 0;
           for (int m = 0; m <= pin; ++m) t += L[m] * edge_t[m];
           HOC_TRY_GOTO(hoc_node_builder_add(&b, HOC_ON_CURVE, c, wrap_t(cv, t), 0, &dst[j]), done);
+          if (curve_foot && curve_foot[c] && grade[id] == SIZE_MAX) foot_set(&foot, dst[j], pin + 1, L, in->xyz, lnodes, tol);
         }
       } else {
         /* inside the face: interpolate (u,v) along the edge; at a pole the
@@ -326,6 +399,7 @@ static hoc_status reinterpolate(const hoc_mesh *in, int p, hoc_nodeset set, hoc_
           }
           hoc_cad_face_wrap(face, uv);
           HOC_TRY_GOTO(hoc_node_builder_add(&b, HOC_ON_FACE, f, uv[0], uv[1], &dst[j]), done);
+          if (to_foot) foot_set(&foot, dst[j], pin + 1, L, in->xyz, lnodes, tol);
         }
       }
     }
@@ -364,8 +438,10 @@ static hoc_status reinterpolate(const hoc_mesh *in, int p, hoc_nodeset set, hoc_
       }
       hoc_cad_face_wrap(face, uv);
       HOC_TRY_GOTO(hoc_node_builder_add(&b, HOC_ON_FACE, f, uv[0], uv[1], &out_cn[k]), done);
+      if (to_foot && cusp < 0) foot_set(&foot, out_cn[k], npi, Nk, in->xyz, cn, tol);
     }
   }
+  if (face_foot) HOC_TRY_GOTO(foot_move(model, &foot, &b), done);
   /* lines of order p along the curve edges that elements use */
   size_t nl = 0;
   HOC_ALLOC_GOTO(lconn, in->n_lines * (size_t)(p + 1) + 1, done);
@@ -424,6 +500,10 @@ done:
   free(edge_first);
   free(edge_a);
   hoc_node_builder_free(&b);
+  free(foot.xyz);
+  free(foot.tol);
+  free(foot.want);
+  free(curve_foot);
   free(elem_edge);
   free(grade);
   free(edge_new);
@@ -445,7 +525,18 @@ hoc_status hoc_mesh_elevate(const hoc_mesh *in, int order, hoc_nodeset set, hoc_
   HOC_CHECK(order >= 1 && order <= HOC_MAX_ORDER, HOC_ERR_ARGUMENT,
             "order %d out of range 1..%d", order, HOC_MAX_ORDER);
   HOC_TRY(check_set(set));
-  return reinterpolate(in, order, set, out);
+  return reinterpolate(in, order, set, NULL, out);
+}
+
+hoc_status hoc_mesh_elevate_feet(const hoc_mesh *in, int order, hoc_nodeset set,
+                                 const unsigned char *face_foot, hoc_mesh **out) {
+  HOC_CHECK(out, HOC_ERR_ARGUMENT, "mesh output is NULL");
+  *out = NULL;
+  HOC_CHECK(in && face_foot, HOC_ERR_ARGUMENT, "no mesh or no faces given");
+  HOC_CHECK(order >= 1 && order <= HOC_MAX_ORDER, HOC_ERR_ARGUMENT,
+            "order %d out of range 1..%d", order, HOC_MAX_ORDER);
+  HOC_TRY(check_set(set));
+  return reinterpolate(in, order, set, face_foot, out);
 }
 
 hoc_status hoc_mesh_convert(const hoc_mesh *in, hoc_nodeset set, hoc_mesh **out) {
@@ -457,5 +548,5 @@ hoc_status hoc_mesh_convert_nodeset(const hoc_mesh *in, hoc_nodeset set, hoc_mes
   *out = NULL;
   HOC_CHECK(in, HOC_ERR_ARGUMENT, "no mesh given");
   HOC_TRY(check_set(set));
-  return reinterpolate(in, in->order, set, out);
+  return reinterpolate(in, in->order, set, NULL, out);
 }

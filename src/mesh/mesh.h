@@ -159,6 +159,18 @@ hoc_status hoc_mesh_alloc(hoc_model *model, int order, size_t n_nodes, size_t n_
 /** The same elements with the nodes of another reference distribution:
  *  each element's parametric map (t on curve edges, (u,v) inside) evaluated
  *  at the new set's reference nodes, mapped onto the CAD. */
+/** hoc_mesh_elevate, except that on the faces flagged in face_foot[n_faces]
+ *  each new node goes to the foot of the perpendicular from the source
+ *  element's point at that node (from a linear element its flat triangle,
+ *  from a curved one its polynomial), starting from the parameter-space
+ *  place (hoc_cad_face_foot); on a curve along such a face likewise. Where
+ *  a face's parametrisation varies within an element (a knot where its
+ *  derivative jumps, a stretched patch), nodes straight in (u, v) crowd on
+ *  one side and can fold the element; the feet do not depend on the
+ *  parametrisation. Elements at a pole, and graded edges at a cusp, keep
+ *  the parameter-space rules. */
+hoc_status hoc_mesh_elevate_feet(const hoc_mesh *in, int order, hoc_nodeset set,
+                                 const unsigned char *face_foot, hoc_mesh **out);
 hoc_status hoc_mesh_convert_nodeset(const hoc_mesh *mesh, hoc_nodeset set, hoc_mesh **out);
 
 /** Numbers of the edges between the elements' corners: elem_edge[3 e + k]

@@ -150,6 +150,71 @@ static hoc_status check_model_options(const hoc_model *model, const hoc_mesh_opt
   return HOC_OK;
 }
 
+/* Per face of the mesh: elements tangled (tangled[f]) and min q (min[f]). */
+static hoc_status face_quality(const hoc_run *run, const hoc_mesh *m, size_t *tangled,
+                               double *min) {
+  size_t ne = hoc_mesh_num_elements(m);
+  int nf = hoc_model_num_faces(m->model);
+  double *q = hoc_calloc(ne + 1, sizeof *q);
+  unsigned char *t = hoc_calloc(ne + 1, 1);
+  hoc_status status = q && t ? HOC_OK : HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
+  if (status == HOC_OK) status = hoc_mesh_measure(m, run->o.measure, q, t, NULL);
+  for (int f = 0; f < nf; ++f) {
+    tangled[f] = 0;
+    min[f] = INFINITY;
+  }
+  for (size_t e = 0; e < ne && status == HOC_OK; ++e) {
+    int f = m->elem_face[e];
+    tangled[f] += t[e];
+    if (!(q[e] >= min[f])) min[f] = q[e];
+  }
+  free(q);
+  free(t);
+  return status;
+}
+
+hoc_status hoc_pipeline_raise(const hoc_run *run, const hoc_mesh *in, int order, hoc_mesh **out) {
+  hoc_nodeset set = run->o.nodeset;
+  HOC_TRY(hoc_mesh_elevate(in, order, set, out));
+  if (order < 2) return HOC_OK;
+  int nf = hoc_model_num_faces(in->model);
+  hoc_mesh *feet = NULL;
+  size_t *tangled = hoc_calloc(2 * (size_t)nf + 1, sizeof *tangled);
+  double *min = hoc_calloc(2 * (size_t)nf + 1, sizeof *min);
+  unsigned char *take = hoc_calloc((size_t)nf + 1, 1);
+  hoc_status status = HOC_OK;
+  if (!tangled || !min || !take) {
+    status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
+    goto done;
+  }
+  for (int f = 0; f < nf; ++f) take[f] = 1;
+  HOC_TRY_GOTO(hoc_mesh_elevate_feet(in, order, set, take, &feet), done);
+  HOC_TRY_GOTO(face_quality(run, *out, tangled, min), done);
+  HOC_TRY_GOTO(face_quality(run, feet, tangled + nf, min + nf), done);
+  int n_take = 0;
+  for (int f = 0; f < nf; ++f) {
+    take[f] = tangled[nf + f] < tangled[f] ||
+              (tangled[nf + f] == tangled[f] &&
+               min[nf + f] > min[f] + HOC_PIPELINE_FOOT_GAIN * fabs(min[f]));
+    n_take += take[f];
+  }
+  if (!n_take) goto done;
+  hoc_mesh_destroy(out);
+  if (n_take == nf) {
+    *out = feet;
+    feet = NULL;
+  } else {
+    HOC_TRY_GOTO(hoc_mesh_elevate_feet(in, order, set, take, out), done);
+  }
+done:
+  if (status != HOC_OK) hoc_mesh_destroy(out);
+  hoc_mesh_destroy(&feet);
+  free(tangled);
+  free(min);
+  free(take);
+  return status;
+}
+
 /* The linear mesh of an attempt: the given one's corners, or the linear
  * mesher's with face bounds lo->face_size; *unlowered_min and
  * prev_elements as in mesh_model_run. */
@@ -198,7 +263,7 @@ static hoc_status coarse_start(const hoc_run *run, hoc_stages *r, const hoc_mesh
                         HOC_PIPELINE_COARSE_ORDER));
   /* the direct raise is measured already: made again only if needed */
   hoc_mesh_destroy(ho);
-  HOC_TRY_GOTO(hoc_mesh_elevate(lin, HOC_PIPELINE_COARSE_ORDER, o->nodeset, &coarse), done);
+  HOC_TRY_GOTO(hoc_pipeline_raise(run, lin, HOC_PIPELINE_COARSE_ORDER, &coarse), done);
   HOC_TRY_GOTO(hoc_repair_optimize(run, r, "coarse", coarse, NULL), done);
   if (hoc_stages_last(r)->stage.stats.tangled) {
     HOC_TRY_GOTO(hoc_run_event(run, HOC_EVENT_NOTE,
@@ -207,11 +272,11 @@ static hoc_status coarse_start(const hoc_run *run, hoc_stages *r, const hoc_mesh
                                HOC_PIPELINE_COARSE_ORDER, hoc_stages_last(r)->stage.stats.tangled,
                                o->order),
                  done);
-    HOC_TRY_GOTO(hoc_mesh_elevate(lin, o->order, o->nodeset, ho), done);
+    HOC_TRY_GOTO(hoc_pipeline_raise(run, lin, o->order, ho), done);
     goto done;
   }
   double t0 = hoc_pipeline_now();
-  HOC_TRY_GOTO(hoc_mesh_elevate(coarse, o->order, o->nodeset, &raised), done);
+  HOC_TRY_GOTO(hoc_pipeline_raise(run, coarse, o->order, &raised), done);
   HOC_TRY_GOTO(hoc_run_stage(run, r, "re-raised", raised, hoc_pipeline_now() - t0, NULL, NULL),
                done);
   hoc_mesh_destroy(ho);
@@ -257,7 +322,7 @@ static hoc_status mesh_model_run(const hoc_run *run, hoc_model *model, model_mes
                                  hoc_mesh_num_elements(m->lin), o->order),
                    done);
       t0 = hoc_pipeline_now();
-      HOC_TRY_GOTO(hoc_mesh_elevate(m->lin, o->order, o->nodeset, &m->ho), done);
+      HOC_TRY_GOTO(hoc_pipeline_raise(run, m->lin, o->order, &m->ho), done);
       HOC_TRY_GOTO(hoc_run_stage(run, r, "high-order", m->ho, hoc_pipeline_now() - t0, NULL, NULL),
                    done);
       *final = m->ho;
@@ -265,7 +330,7 @@ static hoc_status mesh_model_run(const hoc_run *run, hoc_model *model, model_mes
     if (o->optimize && o->order > 1) {
       /* the raised mesh before optimisation, for pictures */
       if (o->keep_stages)
-        HOC_TRY_GOTO(hoc_mesh_elevate(m->lin, o->order, o->nodeset, &m->raised), done);
+        HOC_TRY_GOTO(hoc_pipeline_raise(run, m->lin, o->order, &m->raised), done);
       if (o->order >= HOC_PIPELINE_COARSE_FROM) {
         HOC_TRY_GOTO(coarse_start(run, r, m->lin, &m->ho), done);
         *final = m->ho;

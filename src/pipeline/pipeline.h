@@ -45,6 +45,16 @@
  * and order 3 untangles at a sixth of the cost per sweep. If the coarse
  * optimisation leaves elements tangled, the direct raise is used. */
 #define HOC_PIPELINE_COARSE_FROM 6
+/* Every raise (hoc_pipeline_raise) places the new nodes straight in each
+ * face's (u, v) and, a second time, at the feet of the source elements'
+ * points (hoc_mesh_elevate_feet); a face takes the feet where they tangle
+ * fewer of its elements, or as many and raise its min q by more than this
+ * share. Straight in (u, v) is the better start where the parametrisation
+ * is even and the elements coarse against the curvature (feet of a flat
+ * triangle crowd toward its middle); the feet where the parametrisation
+ * varies within an element (fuselage_occ28366: a knot at u = 2 where
+ * |phi_u| halves, every element across it folded at order 10). */
+#define HOC_PIPELINE_FOOT_GAIN 0.01
 #define HOC_PIPELINE_COARSE_ORDER 3
 /* From this order on, tangled elements left on faces that do not fold
  * have their faces meshed again before any split (hocad mesh, rule 4).
@@ -125,6 +135,11 @@ struct hoc_report {
 typedef struct hoc_run {
   hoc_mesh_options o;
 } hoc_run;
+
+/** The source mesh raised to `order` with the run's node set: the better
+ *  of two placements per face (HOC_PIPELINE_FOOT_GAIN), by the run's
+ *  measure. */
+hoc_status hoc_pipeline_raise(const hoc_run *run, const hoc_mesh *in, int order, hoc_mesh **out);
 
 /* The last stage of r (r->n >= 1). */
 static inline hoc_stage_record *hoc_stages_last(hoc_stages *r) { return &r->s[r->n - 1]; }

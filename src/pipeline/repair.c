@@ -361,9 +361,9 @@ done:
 }
 
 /* The input's high-order nodes placed afresh from its corners, as
- * hoc_mesh_model places them (straight in each face's parameters, along the
- * curves), in *alt with a "re-placed" stage, unless that tangles clearly
- * more elements (over 10% more) than the input (then *alt stays NULL).
+ * hoc_mesh_model places them (hoc_pipeline_raise), in *alt with a
+ * "re-placed" stage, unless that tangles clearly more elements (over 10%
+ * more) than the input (then *alt stays NULL).
  * Other meshers' placement (gmsh's SetOrder projects each node on the CAD)
  * can leave folds the optimiser does not undo from there, and the other way
  * round: hoc_mesh_repair tries both. */
@@ -372,7 +372,9 @@ static hoc_status replace_nodes(const hoc_run *run, hoc_stages *r, const hoc_mes
   double t0 = hoc_pipeline_now();
   hoc_mesh *lin = NULL;
   hoc_status s = hoc_mesh_elevate(mesh, 1, HOC_NODES_EQUISPACED, &lin);
-  if (s == HOC_OK) s = hoc_mesh_elevate(lin, hoc_mesh_order(mesh), hoc_mesh_nodeset(mesh), alt);
+  hoc_run same = *run; /* the input's node set */
+  same.o.nodeset = hoc_mesh_nodeset(mesh);
+  if (s == HOC_OK) s = hoc_pipeline_raise(&same, lin, hoc_mesh_order(mesh), alt);
   hoc_mesh_destroy(&lin);
   if (s == HOC_OK)
     s = hoc_run_stage(run, r, "re-placed", *alt, hoc_pipeline_now() - t0, NULL, NULL);
