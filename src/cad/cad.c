@@ -390,39 +390,55 @@ hoc_status hoc_cad_face_invert(const hoc_model *m, int face, const double xyz[3]
 
 enum { FOOT_STEPS = 20, FOOT_HALVINGS = 8 };
 
-hoc_status hoc_cad_face_foot(const hoc_model *m, int face, const double xyz[3], double tol,
-                             double uv[2]) {
-  const hoc_cad_face *f = &m->faces[face];
-  double x[3], du[3], dv[3];
-  HOC_TRY(hoc_cad_face_eval(m, face, 1, uv, x, du, dv));
+/* Position x[3] and derivatives J[n][3] of a face (n = 2) or curve (n = 1). */
+static hoc_status foot_eval(const hoc_model *m, int n, int entity, const double *par, double *x,
+                            double (*J)[3]) {
+  if (n == 2) return hoc_cad_face_eval(m, entity, 1, par, x, J[0], J[1]);
+  return hoc_cad_curve_eval(m, entity, 1, par, x, J[0]);
+}
+
+/* hoc_cad_face_foot and hoc_cad_curve_foot: n parameters par[n] with
+ * bounds lo, hi and periods. */
+static hoc_status foot(const hoc_model *m, int n, int entity, const double *lo, const double *hi,
+                       const double *period, const double xyz[3], double tol, double *par) {
+  double x[3], J[2][3] = {{0}};
+  HOC_TRY(foot_eval(m, n, entity, par, x, J));
   double d = hoc_dist3(x, xyz), stop = fmax(tol, 1e-14 * m->diagonal);
   for (int it = 0; it < FOOT_STEPS; ++it) {
-    double r[3] = {xyz[0] - x[0], xyz[1] - x[1], xyz[2] - x[2]};
-    double a = hoc_dot3(du, du), b = hoc_dot3(du, dv), c = hoc_dot3(dv, dv);
-    double g0 = hoc_dot3(du, r), g1 = hoc_dot3(dv, r), det = a * c - b * b;
-    if (!(det > 1e-24 * (a * c))) break; /* singular here (a pole): keep the guess */
-    double s0 = (c * g0 - b * g1) / det, s1 = (a * g1 - b * g0) / det;
-    for (int k = 0; k < 2; ++k) {
-      double *s = k ? &s1 : &s0;
-      if (f->period[k] > 0 && fabs(*s) > 0.5 * f->period[k]) *s = copysign(0.5 * f->period[k], *s);
+    double r[3] = {xyz[0] - x[0], xyz[1] - x[1], xyz[2] - x[2]}, s[2] = {0, 0};
+    double a = hoc_dot3(J[0], J[0]), g0 = hoc_dot3(J[0], r);
+    if (n == 2) {
+      double b = hoc_dot3(J[0], J[1]), c = hoc_dot3(J[1], J[1]), g1 = hoc_dot3(J[1], r);
+      double det = a * c - b * b;
+      if (!(det > 1e-24 * (a * c))) break; /* singular here (a pole): stay */
+      s[0] = (c * g0 - b * g1) / det;
+      s[1] = (a * g1 - b * g0) / det;
+    } else {
+      if (!(a > 0)) break;
+      s[0] = g0 / a;
     }
-    /* length of the step on the tangent plane */
-    double len = sqrt(fmax(a * s0 * s0 + 2 * b * s0 * s1 + c * s1 * s1, 0));
+    for (int k = 0; k < n; ++k)
+      if (period[k] > 0 && fabs(s[k]) > 0.5 * period[k]) s[k] = copysign(0.5 * period[k], s[k]);
+    double len = 0; /* the step's length on the tangent plane */
+    for (int d3 = 0; d3 < 3; ++d3) {
+      double l = J[0][d3] * s[0] + (n == 2 ? J[1][d3] * s[1] : 0);
+      len += l * l;
+    }
+    len = sqrt(len);
     int accepted = 0;
-    for (int h = 0; h < FOOT_HALVINGS && !accepted; ++h, s0 *= 0.5, s1 *= 0.5, len *= 0.5) {
-      double trial[2] = {clamp_param(uv[0] + s0, f->lo[0], f->hi[0], f->period[0]),
-                         clamp_param(uv[1] + s1, f->lo[1], f->hi[1], f->period[1])};
-      double xt[3], dut[3], dvt[3];
-      HOC_TRY(hoc_cad_face_eval(m, face, 1, trial, xt, dut, dvt));
+    for (int h = 0; h < FOOT_HALVINGS && !accepted; ++h) {
+      double trial[2] = {0, 0}, xt[3], Jt[2][3] = {{0}};
+      for (int k = 0; k < n; ++k) trial[k] = clamp_param(par[k] + s[k], lo[k], hi[k], period[k]);
+      HOC_TRY(foot_eval(m, n, entity, trial, xt, Jt));
       double dt = hoc_dist3(xt, xyz);
-      if (dt <= d * (1 + 4 * DBL_EPSILON)) { /* or no worse than rounding */
-        uv[0] = trial[0];
-        uv[1] = trial[1];
+      if (dt <= d * (1 + 4 * DBL_EPSILON)) { /* closer, or as close within rounding */
+        memcpy(par, trial, (size_t)n * sizeof *par);
         memcpy(x, xt, sizeof x);
-        memcpy(du, dut, sizeof du);
-        memcpy(dv, dvt, sizeof dv);
+        memcpy(J, Jt, sizeof J);
         d = dt;
         accepted = 1;
+      } else {
+        s[0] *= 0.5, s[1] *= 0.5, len *= 0.5;
       }
     }
     if (!accepted || len < stop) break;
@@ -430,33 +446,16 @@ hoc_status hoc_cad_face_foot(const hoc_model *m, int face, const double xyz[3], 
   return HOC_OK;
 }
 
+hoc_status hoc_cad_face_foot(const hoc_model *m, int face, const double xyz[3], double tol,
+                             double uv[2]) {
+  const hoc_cad_face *f = &m->faces[face];
+  return foot(m, 2, face, f->lo, f->hi, f->period, xyz, tol, uv);
+}
+
 hoc_status hoc_cad_curve_foot(const hoc_model *m, int curve, const double xyz[3], double tol,
                               double *t) {
   const hoc_cad_curve *c = &m->curves[curve];
-  double x[3], dx[3];
-  HOC_TRY(hoc_cad_curve_eval(m, curve, 1, t, x, dx));
-  double d = hoc_dist3(x, xyz), stop = fmax(tol, 1e-14 * m->diagonal);
-  for (int it = 0; it < FOOT_STEPS; ++it) {
-    double r[3] = {xyz[0] - x[0], xyz[1] - x[1], xyz[2] - x[2]}, a = hoc_dot3(dx, dx);
-    if (!(a > 0)) break;
-    double step = hoc_dot3(dx, r) / a, len = fabs(step) * sqrt(a);
-    if (c->period > 0 && fabs(step) > 0.5 * c->period) step = copysign(0.5 * c->period, step);
-    int accepted = 0;
-    for (int h = 0; h < FOOT_HALVINGS && !accepted; ++h, step *= 0.5, len *= 0.5) {
-      double tt = clamp_param(*t + step, c->lo, c->hi, c->period), xt[3], dxt[3];
-      HOC_TRY(hoc_cad_curve_eval(m, curve, 1, &tt, xt, dxt));
-      double dt = hoc_dist3(xt, xyz);
-      if (dt <= d * (1 + 4 * DBL_EPSILON)) { /* or no worse than rounding */
-        *t = tt;
-        memcpy(x, xt, sizeof x);
-        memcpy(dx, dxt, sizeof dx);
-        d = dt;
-        accepted = 1;
-      }
-    }
-    if (!accepted || len < stop) break;
-  }
-  return HOC_OK;
+  return foot(m, 1, curve, &c->lo, &c->hi, &c->period, xyz, tol, t);
 }
 
 hoc_status hoc_cad_curve_invert(const hoc_model *m, int curve, const double xyz[3], double *t,

@@ -203,7 +203,7 @@ static hoc_status cusp_grading(const hoc_mesh *in, const size_t *elem_edge, cons
 /* Targets of the new nodes: the source element's point in space. */
 typedef struct foot_targets {
   double *xyz;         /* [cap][3] */
-  double *tol;         /* [cap] how close: a millionth of the source element's longest edge */
+  double *tol;         /* [cap] how close: 2e-6 of the source element's longest edge */
   unsigned char *want; /* [cap] 1 where the node may go to the foot of its target */
   size_t cap;
 } foot_targets;
@@ -329,7 +329,7 @@ static hoc_status reinterpolate(const hoc_mesh *in, int p, hoc_nodeset set,
     int to_foot = face_foot && face_foot[f];
     double tol = 0;
     for (int k = 0; k < 3 && face_foot; ++k)
-      tol = fmax(tol, 1e-6 * hoc_dist3(in->xyz + 3 * cn[k], in->xyz + 3 * cn[(k + 1) % 3]));
+      tol = fmax(tol, 2e-6 * hoc_dist3(in->xyz + 3 * cn[k], in->xyz + 3 * cn[(k + 1) % 3]));
     for (int i = 0; i < npi; ++i) to_foot &= in->slot_pole[sl[i]] == 0;
     size_t lnodes[HOC_MAX_ORDER + 1];
     for (int k = 0; k < 3 && p > 1; ++k) {
