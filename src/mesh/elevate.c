@@ -1,6 +1,7 @@
 /* Order elevation: new nodes placed in the face's parameter space from the
  * reference node distribution (straight in (u,v)), nodes on CAD curves
- * placed in the curve's parameter, then mapped onto the CAD.
+ * placed in the curve's parameter, then mapped onto the CAD; or, on faces
+ * asked for, at the feet of the source element's points.
  * SPDX-License-Identifier: GPL-2.0-or-later */
 #include "basis/basis.h"
 #include "core/geometry.h"
@@ -9,7 +10,6 @@
 
 #include <math.h>
 #include <stdint.h>
-#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -194,12 +194,6 @@ static hoc_status cusp_grading(const hoc_mesh *in, const size_t *elem_edge, cons
   return HOC_OK;
 }
 
-/* Re-interpolation: the new mesh of order p on node set `set` evaluates
- * each source element's parametric map at the new reference nodes. Nodes
- * on CAD curves are interpolated in the curve's parameter t along the edge;
- * other nodes in the face's (u,v), unwrapped per element. From a linear
- * mesh this is the paper's placement (straight in (u,v)); from a curved mesh
- * it keeps the curved geometry. */
 /* Targets of the new nodes: the source element's point in space. */
 typedef struct foot_targets {
   double *xyz;         /* [cap][3] */
@@ -241,6 +235,12 @@ static hoc_status foot_move(const hoc_model *model, const foot_targets *t, hoc_n
   return hoc_par_error_raise(&err);
 }
 
+/* Re-interpolation: the new mesh of order p on node set `set` evaluates
+ * each source element's parametric map at the new reference nodes. Nodes
+ * on CAD curves are interpolated in the curve's parameter t along the edge;
+ * other nodes in the face's (u,v), unwrapped per element. From a linear
+ * mesh this is the paper's placement (straight in (u,v)); from a curved mesh
+ * it keeps the curved geometry. */
 static hoc_status reinterpolate(const hoc_mesh *in, int p, hoc_nodeset set,
                                 const unsigned char *face_foot, hoc_mesh **out) {
   const hoc_model *model = in->model;
@@ -378,7 +378,8 @@ static hoc_status reinterpolate(const hoc_mesh *in, int p, hoc_nodeset set,
           double t = 0;
           for (int m = 0; m <= pin; ++m) t += L[m] * edge_t[m];
           HOC_TRY_GOTO(hoc_node_builder_add(&b, HOC_ON_CURVE, c, wrap_t(cv, t), 0, &dst[j]), done);
-          if (curve_foot && curve_foot[c] && grade[id] == SIZE_MAX) foot_set(&foot, dst[j], pin + 1, L, in->xyz, lnodes, tol);
+          if (curve_foot && curve_foot[c] && grade[id] == SIZE_MAX)
+            foot_set(&foot, dst[j], pin + 1, L, in->xyz, lnodes, tol);
         }
       } else {
         /* inside the face: interpolate (u,v) along the edge; at a pole the
