@@ -71,7 +71,7 @@ static void test_kinked_plane(int p) {
   hoc_run run;
   hoc_mesh_options_default(&run.o);
   CHECK_OK(hoc_mesh_elevate(lin, p, HOC_NODES_EQUISPACED, &straight));
-  CHECK_OK(hoc_pipeline_raise(&run, lin, p, NULL, &raised));
+  CHECK_OK(hoc_pipeline_raise(&run, lin, p, &raised));
   if (!straight || !raised) goto done;
   size_t ne = hoc_mesh_num_elements(lin);
   double *q1 = calloc(ne, sizeof *q1), *qp = calloc(ne, sizeof *qp);
@@ -124,7 +124,7 @@ static void test_never_worse(void) {
   unsigned char all = 1;
   CHECK_OK(hoc_mesh_elevate(lin, 8, HOC_NODES_EQUISPACED, &straight));
   CHECK_OK(hoc_mesh_elevate_feet(lin, 8, HOC_NODES_EQUISPACED, &all, &feet));
-  CHECK_OK(hoc_pipeline_raise(&run, lin, 8, NULL, &raised));
+  CHECK_OK(hoc_pipeline_raise(&run, lin, 8, &raised));
   if (straight && feet && raised) {
     hoc_quality_stats ss = measure(straight, NULL), sf = measure(feet, NULL),
                       sr = measure(raised, NULL);

@@ -173,19 +173,11 @@ static hoc_status face_quality(const hoc_run *run, const hoc_mesh *m, size_t *ta
   return status;
 }
 
-hoc_status hoc_pipeline_raise(const hoc_run *run, const hoc_mesh *in, int order,
-                              unsigned char *faces, hoc_mesh **out) {
+hoc_status hoc_pipeline_raise(const hoc_run *run, const hoc_mesh *in, int order, hoc_mesh **out) {
   hoc_nodeset set = run->o.nodeset;
-  int nf = hoc_model_num_faces(in->model);
-  if (hoc_mesh_order(in) > 1) { /* curved: the straight source's choice */
-    int any = 0;
-    for (int f = 0; f < nf && faces; ++f) any |= faces[f];
-    if (any) return hoc_mesh_elevate_feet(in, order, set, faces, out);
-    return hoc_mesh_elevate(in, order, set, out);
-  }
   HOC_TRY(hoc_mesh_elevate(in, order, set, out));
-  if (faces) memset(faces, 0, (size_t)nf);
   if (order < 2) return HOC_OK;
+  int nf = hoc_model_num_faces(in->model);
   hoc_mesh *feet = NULL;
   size_t *tangled = hoc_calloc(2 * (size_t)nf + 1, sizeof *tangled);
   double *min = hoc_calloc(2 * (size_t)nf + 1, sizeof *min);
@@ -206,7 +198,6 @@ hoc_status hoc_pipeline_raise(const hoc_run *run, const hoc_mesh *in, int order,
                min[nf + f] > min[f] + HOC_PIPELINE_FOOT_GAIN * fabs(min[f]));
     n_take += take[f];
   }
-  if (faces) memcpy(faces, take, (size_t)nf);
   if (!n_take) goto done;
   hoc_mesh_destroy(out);
   if (n_take == nf) {
@@ -267,14 +258,12 @@ static hoc_status coarse_start(const hoc_run *run, hoc_stages *r, const hoc_mesh
                                hoc_mesh **ho) {
   const hoc_mesh_options *o = &run->o;
   hoc_mesh *coarse = NULL, *raised = NULL;
-  unsigned char *feet = hoc_calloc((size_t)hoc_model_num_faces(lin->model) + 1, 1);
-  hoc_status status = feet ? HOC_OK : HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
-  if (status != HOC_OK) return status;
+  hoc_status status = HOC_OK;
   HOC_TRY(hoc_run_event(run, HOC_EVENT_PROGRESS, "optimising at order %d first",
                         HOC_PIPELINE_COARSE_ORDER));
   /* the direct raise is measured already: made again only if needed */
   hoc_mesh_destroy(ho);
-  HOC_TRY_GOTO(hoc_pipeline_raise(run, lin, HOC_PIPELINE_COARSE_ORDER, feet, &coarse), done);
+  HOC_TRY_GOTO(hoc_pipeline_raise(run, lin, HOC_PIPELINE_COARSE_ORDER, &coarse), done);
   HOC_TRY_GOTO(hoc_repair_optimize(run, r, "coarse", coarse, NULL), done);
   if (hoc_stages_last(r)->stage.stats.tangled) {
     HOC_TRY_GOTO(hoc_run_event(run, HOC_EVENT_NOTE,
@@ -283,11 +272,11 @@ static hoc_status coarse_start(const hoc_run *run, hoc_stages *r, const hoc_mesh
                                HOC_PIPELINE_COARSE_ORDER, hoc_stages_last(r)->stage.stats.tangled,
                                o->order),
                  done);
-    HOC_TRY_GOTO(hoc_pipeline_raise(run, lin, o->order, NULL, ho), done);
+    HOC_TRY_GOTO(hoc_pipeline_raise(run, lin, o->order, ho), done);
     goto done;
   }
   double t0 = hoc_pipeline_now();
-  HOC_TRY_GOTO(hoc_pipeline_raise(run, coarse, o->order, feet, &raised), done);
+  HOC_TRY_GOTO(hoc_pipeline_raise(run, coarse, o->order, &raised), done);
   HOC_TRY_GOTO(hoc_run_stage(run, r, "re-raised", raised, hoc_pipeline_now() - t0, NULL, NULL),
                done);
   hoc_mesh_destroy(ho);
@@ -296,7 +285,6 @@ static hoc_status coarse_start(const hoc_run *run, hoc_stages *r, const hoc_mesh
 done:
   hoc_mesh_destroy(&raised);
   hoc_mesh_destroy(&coarse);
-  free(feet);
   return status;
 }
 
@@ -334,7 +322,7 @@ static hoc_status mesh_model_run(const hoc_run *run, hoc_model *model, model_mes
                                  hoc_mesh_num_elements(m->lin), o->order),
                    done);
       t0 = hoc_pipeline_now();
-      HOC_TRY_GOTO(hoc_pipeline_raise(run, m->lin, o->order, NULL, &m->ho), done);
+      HOC_TRY_GOTO(hoc_pipeline_raise(run, m->lin, o->order, &m->ho), done);
       HOC_TRY_GOTO(hoc_run_stage(run, r, "high-order", m->ho, hoc_pipeline_now() - t0, NULL, NULL),
                    done);
       *final = m->ho;
@@ -342,7 +330,7 @@ static hoc_status mesh_model_run(const hoc_run *run, hoc_model *model, model_mes
     if (o->optimize && o->order > 1) {
       /* the raised mesh before optimisation, for pictures */
       if (o->keep_stages)
-        HOC_TRY_GOTO(hoc_pipeline_raise(run, m->lin, o->order, NULL, &m->raised), done);
+        HOC_TRY_GOTO(hoc_pipeline_raise(run, m->lin, o->order, &m->raised), done);
       if (o->order >= HOC_PIPELINE_COARSE_FROM) {
         HOC_TRY_GOTO(coarse_start(run, r, m->lin, &m->ho), done);
         *final = m->ho;

@@ -53,13 +53,7 @@
  * is even and the elements coarse against the curvature (feet of a flat
  * triangle crowd toward its middle); the feet where the parametrisation
  * varies within an element (fuselage_occ28366: a knot at u = 2 where
- * |phi_u| halves, every element across it folded at order 10). The choice
- * is made where straight triangles are raised; the re-raise from the
- * optimised coarse order keeps it. Made again from curved elements, where
- * both placements differ little on an even parametrisation, a count lower
- * by one or two says nothing of the optimisation to come (nist_ctc_03 at
- * order 8: 5 faces would take the feet, 28 tangled instead of 35, and the
- * optimisation would leave 4 where it leaves none). */
+ * |phi_u| halves, every element across it folded at order 10). */
 #define HOC_PIPELINE_FOOT_GAIN 0.01
 #define HOC_PIPELINE_COARSE_ORDER 3
 /* From this order on, tangled elements left on faces that do not fold
@@ -142,14 +136,10 @@ typedef struct hoc_run {
   hoc_mesh_options o;
 } hoc_run;
 
-/** The source mesh raised to `order` with the run's node set. From a
- *  linear mesh: the better of two placements per face
- *  (HOC_PIPELINE_FOOT_GAIN), by the run's measure; faces[n_faces] (if not
- *  NULL) receives which faces took the feet. From a curved mesh: the feet
- *  on the faces flagged in faces[] (the choice made when its linear mesh
- *  was raised), straight in (u, v) elsewhere or if faces is NULL. */
-hoc_status hoc_pipeline_raise(const hoc_run *run, const hoc_mesh *in, int order,
-                              unsigned char *faces, hoc_mesh **out);
+/** The source mesh raised to `order` with the run's node set: the better
+ *  of two placements per face (HOC_PIPELINE_FOOT_GAIN), by the run's
+ *  measure. */
+hoc_status hoc_pipeline_raise(const hoc_run *run, const hoc_mesh *in, int order, hoc_mesh **out);
 
 /* The last stage of r (r->n >= 1). */
 static inline hoc_stage_record *hoc_stages_last(hoc_stages *r) { return &r->s[r->n - 1]; }

@@ -374,7 +374,7 @@ static hoc_status replace_nodes(const hoc_run *run, hoc_stages *r, const hoc_mes
   hoc_status s = hoc_mesh_elevate(mesh, 1, HOC_NODES_EQUISPACED, &lin);
   hoc_run same = *run; /* the input's node set */
   same.o.nodeset = hoc_mesh_nodeset(mesh);
-  if (s == HOC_OK) s = hoc_pipeline_raise(&same, lin, hoc_mesh_order(mesh), NULL, alt);
+  if (s == HOC_OK) s = hoc_pipeline_raise(&same, lin, hoc_mesh_order(mesh), alt);
   hoc_mesh_destroy(&lin);
   if (s == HOC_OK)
     s = hoc_run_stage(run, r, "re-placed", *alt, hoc_pipeline_now() - t0, NULL, NULL);
