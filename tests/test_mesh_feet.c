@@ -18,6 +18,7 @@
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 /* The foot on a sphere and on a circle, against the closed form: the
  * point of radius a along the direction of the given one. */
@@ -71,11 +72,18 @@ static void test_kinked_plane(int p) {
   hoc_run run;
   hoc_mesh_options_default(&run.o);
   CHECK_OK(hoc_mesh_elevate(lin, p, HOC_NODES_EQUISPACED, &straight));
-  CHECK_OK(hoc_pipeline_raise(&run, lin, p, &raised));
-  if (!straight || !raised) goto done;
   size_t ne = hoc_mesh_num_elements(lin);
-  double *q1 = calloc(ne, sizeof *q1), *qp = calloc(ne, sizeof *qp);
+  double *q1 = calloc(ne, sizeof *q1), *qp = calloc(ne, sizeof *qp), *qr = calloc(ne, sizeof *qr);
+  CHECK_OK(hoc_pipeline_raise(&run, lin, p, &raised, qr));
+  if (!straight || !raised || !q1 || !qp || !qr) {
+    free(q1);
+    free(qp);
+    free(qr);
+    goto done;
+  }
   hoc_quality_stats s1 = measure(lin, q1), ss = measure(straight, NULL), sr = measure(raised, qp);
+  /* the raise tells the q it measured: those of the mesh it gives */
+  CHECK(memcmp(qr, qp, ne * sizeof *qr) == 0);
   /* straight in (u, v), the elements across the knot lose much of their q */
   CHECK(ss.tangled > 0 || ss.min < 0.9 * s1.min);
   /* at the feet every element is affine: its linear q, to rounding */
@@ -102,10 +110,86 @@ static void test_kinked_plane(int p) {
   CHECK(wx < 1e-12);
   free(q1);
   free(qp);
+  free(qr);
 done:
   hoc_mesh_destroy(&lin);
   hoc_mesh_destroy(&straight);
   hoc_mesh_destroy(&raised);
+  hoc_model_destroy(&m);
+}
+
+/* The raise makes the mesh in which some faces take the feet by copying
+ * nodes from the two placements it built (hoc_mesh_take_feet): it must be
+ * the mesh a third raise would make, node for node, on a model with curves
+ * between faces that take the feet and faces that do not, periodic faces
+ * and seams (the screw). */
+static void test_take_feet_is_a_raise(void) {
+  char path[1024];
+  snprintf(path, sizeof path, "%s/screw.step", HOC_MODELS_DIR);
+  hoc_model *m = NULL;
+  CHECK_OK(hoc_model_open(path, &m));
+  if (!m) return;
+  hoc_linear_options lo;
+  hoc_linear_options_default(&lo);
+  hoc_mesh *lin = NULL, *merged = NULL, *feet = NULL, *third = NULL;
+  int nf = hoc_model_num_faces(m);
+  unsigned char *all = malloc((size_t)nf), *take = malloc((size_t)nf);
+  CHECK_OK(hoc_mesh_generate_linear(m, &lo, &lin));
+  if (!lin || !all || !take) goto done;
+  for (int f = 0; f < nf; ++f) {
+    all[f] = 1;
+    take[f] = f % 2;
+  }
+  CHECK_OK(hoc_mesh_elevate(lin, 4, HOC_NODES_EQUISPACED, &merged));
+  CHECK_OK(hoc_mesh_elevate_feet(lin, 4, HOC_NODES_EQUISPACED, all, &feet));
+  CHECK_OK(hoc_mesh_elevate_feet(lin, 4, HOC_NODES_EQUISPACED, take, &third));
+  if (!merged || !feet || !third) goto done;
+  /* the nodes that move: on faces that take the feet and on their curves */
+  size_t moved = 0, moved_curve = 0;
+  for (size_t i = 0; i < third->n_nodes; ++i)
+    if (memcmp(third->xyz + 3 * i, merged->xyz + 3 * i, 3 * sizeof(double))) {
+      ++moved;
+      moved_curve += third->dim[i] == HOC_ON_CURVE;
+    }
+  CHECK_OK(hoc_mesh_take_feet(merged, feet, take));
+  size_t np = (size_t)third->np, ne = third->n_elems;
+  CHECK(merged->n_nodes == third->n_nodes && merged->n_slots == third->n_slots);
+  CHECK(memcmp(merged->xyz, third->xyz, 3 * third->n_nodes * sizeof(double)) == 0);
+  CHECK(memcmp(merged->param, third->param, 2 * third->n_nodes * sizeof(double)) == 0);
+  CHECK(memcmp(merged->slot_uv, third->slot_uv, 2 * third->n_slots * sizeof(double)) == 0);
+  CHECK(memcmp(merged->elem_uv, third->elem_uv, 2 * ne * np * sizeof(double)) == 0);
+  CHECK(merged->face_gap >= third->face_gap);
+  printf("screw at order 4, odd faces at the feet: %zu of %zu nodes moved (%zu on curves), "
+         "the copy is the raise\n",
+         moved, third->n_nodes, moved_curve);
+  CHECK(moved > 0 && moved_curve > 0);
+  /* a mesh of another source is refused */
+  hoc_mesh *other = NULL;
+  CHECK_OK(hoc_mesh_elevate(lin, 3, HOC_NODES_EQUISPACED, &other));
+  if (other) CHECK_STATUS(hoc_mesh_take_feet(other, feet, take), HOC_ERR_MISMATCH);
+  hoc_mesh_destroy(&other);
+  /* the raise's q, known from its placements, are those measured anew */
+  hoc_run run;
+  hoc_mesh_options_default(&run.o);
+  for (int p = 2; p <= 8; p += 3) {
+    hoc_mesh *raised = NULL;
+    double *q = calloc(ne, sizeof *q), *q2 = calloc(ne, sizeof *q2);
+    CHECK_OK(hoc_pipeline_raise(&run, lin, p, &raised, q));
+    if (raised && q && q2) {
+      CHECK_OK(hoc_mesh_measure(raised, HOC_MEASURE_SHAPE, q2, NULL, NULL));
+      CHECK(memcmp(q, q2, ne * sizeof *q) == 0);
+    }
+    free(q);
+    free(q2);
+    hoc_mesh_destroy(&raised);
+  }
+done:
+  free(all);
+  free(take);
+  hoc_mesh_destroy(&lin);
+  hoc_mesh_destroy(&merged);
+  hoc_mesh_destroy(&feet);
+  hoc_mesh_destroy(&third);
   hoc_model_destroy(&m);
 }
 
@@ -124,7 +208,7 @@ static void test_never_worse(void) {
   unsigned char all = 1;
   CHECK_OK(hoc_mesh_elevate(lin, 8, HOC_NODES_EQUISPACED, &straight));
   CHECK_OK(hoc_mesh_elevate_feet(lin, 8, HOC_NODES_EQUISPACED, &all, &feet));
-  CHECK_OK(hoc_pipeline_raise(&run, lin, 8, &raised));
+  CHECK_OK(hoc_pipeline_raise(&run, lin, 8, &raised, NULL));
   if (straight && feet && raised) {
     hoc_quality_stats ss = measure(straight, NULL), sf = measure(feet, NULL),
                       sr = measure(raised, NULL);
@@ -146,5 +230,6 @@ int main(void) {
   test_kinked_plane(3);
   test_kinked_plane(8);
   test_never_worse();
+  test_take_feet_is_a_raise();
   return test_report();
 }

@@ -540,6 +540,49 @@ hoc_status hoc_mesh_elevate_feet(const hoc_mesh *in, int order, hoc_nodeset set,
   return reinterpolate(in, order, set, face_foot, out);
 }
 
+void hoc_mesh_feet_curves(const hoc_mesh *m, const unsigned char *faces, unsigned char *curves) {
+  size_t np = (size_t)m->np;
+  /* those of the curve nodes of the faces' elements: at p >= 2 every edge
+   * on a curve has some */
+  for (size_t e = 0; e < m->n_elems; ++e) {
+    if (!faces[m->elem_face[e]]) continue;
+    for (size_t k = 3; k < np; ++k) {
+      size_t i = m->conn[e * np + k];
+      if (m->dim[i] == HOC_ON_CURVE) curves[m->entity[i]] = 1;
+    }
+  }
+}
+
+hoc_status hoc_mesh_take_feet(hoc_mesh *m, const hoc_mesh *feet, const unsigned char *take) {
+  HOC_CHECK(m && feet && take, HOC_ERR_ARGUMENT, "no mesh or no faces given");
+  HOC_CHECK(m->model == feet->model && m->order == feet->order && m->n_nodes == feet->n_nodes &&
+                m->n_elems == feet->n_elems && m->n_slots == feet->n_slots,
+            HOC_ERR_MISMATCH, "the two raises are not of one source");
+  unsigned char *curve = hoc_calloc((size_t)m->model->n_curves + 1, 1);
+  HOC_CHECK(curve, HOC_ERR_MEMORY, "out of memory");
+  hoc_mesh_feet_curves(m, take, curve);
+  for (size_t i = 0; i < m->n_nodes; ++i) {
+    int from_feet = m->dim[i] == HOC_ON_FACE    ? take[m->entity[i]]
+                    : m->dim[i] == HOC_ON_CURVE ? curve[m->entity[i]]
+                                                : 0;
+    if (!from_feet) continue;
+    memcpy(m->xyz + 3 * i, feet->xyz + 3 * i, 3 * sizeof *m->xyz);
+    memcpy(m->param + 2 * i, feet->param + 2 * i, 2 * sizeof *m->param);
+  }
+  for (size_t sl = 0; sl < m->n_slots; ++sl) {
+    size_t i = m->slot_node[sl];
+    int from_feet = m->dim[i] == HOC_ON_FACE    ? take[m->entity[i]]
+                    : m->dim[i] == HOC_ON_CURVE ? curve[m->entity[i]]
+                                                : 0;
+    if (from_feet) memcpy(m->slot_uv + 2 * sl, feet->slot_uv + 2 * sl, 2 * sizeof *m->slot_uv);
+  }
+  free(curve);
+  hoc_mesh_element_params(m);
+  hoc_mesh_per_element_pole_params(m);
+  if (feet->face_gap > m->face_gap) m->face_gap = feet->face_gap;
+  return HOC_OK;
+}
+
 hoc_status hoc_mesh_convert(const hoc_mesh *in, hoc_nodeset set, hoc_mesh **out) {
   return hoc_mesh_convert_nodeset(in, set, out);
 }

@@ -426,6 +426,11 @@ static hoc_status slot_normal(const hoc_model *model, int f, const double *uv, c
 }
 
 hoc_status hoc_mesh_slot_normals(const hoc_mesh *m, double *normal) {
+  return hoc_mesh_slot_normals_of(m, NULL, normal);
+}
+
+hoc_status hoc_mesh_slot_normals_of(const hoc_mesh *m, const unsigned char *which,
+                                    double *normal) {
   const hoc_model *model = m->model;
   int nf = model->n_faces;
   /* slots grouped per face */
@@ -439,10 +444,12 @@ hoc_status hoc_mesh_slot_normals(const hoc_mesh *m, double *normal) {
     status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
     goto done;
   }
-  for (size_t s = 0; s < m->n_slots; ++s) start[m->slot_face[s] + 1]++;
+  for (size_t s = 0; s < m->n_slots; ++s)
+    if (!which || which[s]) start[m->slot_face[s] + 1]++;
   for (int f = 0; f < nf; ++f) start[f + 1] += start[f];
   memcpy(fill, start, ((size_t)nf + 1) * sizeof *fill);
-  for (size_t s = 0; s < m->n_slots; ++s) order[fill[m->slot_face[s]]++] = s;
+  for (size_t s = 0; s < m->n_slots; ++s)
+    if (!which || which[s]) order[fill[m->slot_face[s]]++] = s;
   HOC_TRY_GOTO(hoc_split_groups(start, nf, CHUNK, &chunk, &n_chunks), done);
 #pragma omp parallel if (n_chunks > 1 && model->thread_safe)
   {

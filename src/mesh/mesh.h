@@ -171,6 +171,17 @@ hoc_status hoc_mesh_alloc(hoc_model *model, int order, size_t n_nodes, size_t n_
  *  the parameter-space rules. */
 hoc_status hoc_mesh_elevate_feet(const hoc_mesh *in, int order, hoc_nodeset set,
                                  const unsigned char *face_foot, hoc_mesh **out);
+/** m (hoc_mesh_elevate of a source) becomes hoc_mesh_elevate_feet of that
+ *  source with face_foot = take, its nodes copied from feet, the source's
+ *  hoc_mesh_elevate_feet with face_foot flagging at least the faces of
+ *  take: the faces' nodes and those of the curves along them. The mesh is
+ *  the one a third raise would make, for a copy of nodes; face_gap is the
+ *  larger of the two. */
+hoc_status hoc_mesh_take_feet(hoc_mesh *m, const hoc_mesh *feet, const unsigned char *take);
+/** The curves whose nodes hoc_mesh_elevate_feet places at the feet with
+ *  face_foot = faces: those along the faces' elements, flagged in
+ *  curves[n_curves] (set to 1, others left); m of order >= 2. */
+void hoc_mesh_feet_curves(const hoc_mesh *m, const unsigned char *faces, unsigned char *curves);
 hoc_status hoc_mesh_convert_nodeset(const hoc_mesh *mesh, hoc_nodeset set, hoc_mesh **out);
 
 /** Numbers of the edges between the elements' corners: elem_edge[3 e + k]
@@ -219,6 +230,10 @@ hoc_status hoc_curves_angle_at(const hoc_model *model, int vertex, const int c[2
  *  the normal is the limit along the slot's element, taken just off the
  *  pole at the element's arbitrary coordinate). normal[n_slots][3]. */
 hoc_status hoc_mesh_slot_normals(const hoc_mesh *mesh, double *normal);
+/** The same for the slots flagged in which[n_slots] (all if NULL); the
+ *  others' normals are left as they are. */
+hoc_status hoc_mesh_slot_normals_of(const hoc_mesh *mesh, const unsigned char *which,
+                                    double *normal);
 
 /** Structured triangulation of an analytic model's single face for tests:
  *  nu x nv cells of its parameter domain, split into triangles, order 1. */

@@ -5,6 +5,7 @@
  * SPDX-License-Identifier: GPL-2.0-or-later */
 #include "pipeline/pipeline.h"
 #include "mesh/mesh.h"
+#include "quality/quality.h"
 
 #include <math.h>
 #include <stdarg.h>
@@ -37,14 +38,18 @@ hoc_status hoc_run_event(const hoc_run *run, hoc_event_kind kind, const char *fm
 }
 
 hoc_status hoc_run_stage(const hoc_run *run, hoc_stages *r, const char *name, const hoc_mesh *mesh,
-                         double seconds, double *q, const hoc_optimize_result *result) {
+                         double seconds, const double *q, const hoc_optimize_result *result) {
   HOC_CHECK(r->n < HOC_PIPELINE_MAX_STAGES, HOC_ERR_INTERNAL, "more than %d stages",
             HOC_PIPELINE_MAX_STAGES);
   hoc_stage_record *s = &r->s[r->n];
   *s = (hoc_stage_record){0}; /* a slot reused after a refinement keeps nothing */
   s->stage.name = name;
   s->stage.seconds = seconds;
-  HOC_TRY(hoc_mesh_measure(mesh, run->o.measure, q, NULL, &s->stage.stats));
+  if (q) {
+    hoc_quality_stats_from(q, hoc_mesh_num_elements(mesh), hoc_mesh_order(mesh), &s->stage.stats);
+  } else {
+    HOC_TRY(hoc_mesh_measure(mesh, run->o.measure, NULL, NULL, &s->stage.stats));
+  }
   if (result) {
     s->stage.optimized = 1;
     s->stage.iterations = result->iterations;
@@ -150,68 +155,112 @@ static hoc_status check_model_options(const hoc_model *model, const hoc_mesh_opt
   return HOC_OK;
 }
 
-/* Per face of the mesh: elements tangled (tangled[f]) and min q (min[f]). */
-static hoc_status face_quality(const hoc_run *run, const hoc_mesh *m, size_t *tangled,
-                               double *min) {
+/* Per face of the mesh whose element qualities are q: elements tangled
+ * (tangled[f], may be NULL) and min q (min[f]). */
+static void face_quality(const hoc_mesh *m, const double *q, size_t *tangled, double *min) {
   size_t ne = hoc_mesh_num_elements(m);
   int nf = hoc_model_num_faces(m->model);
-  double *q = hoc_calloc(ne + 1, sizeof *q);
-  unsigned char *t = hoc_calloc(ne + 1, 1);
-  hoc_status status = q && t ? HOC_OK : HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
-  if (status == HOC_OK) status = hoc_mesh_measure(m, run->o.measure, q, t, NULL);
   for (int f = 0; f < nf; ++f) {
-    tangled[f] = 0;
+    if (tangled) tangled[f] = 0;
     min[f] = INFINITY;
   }
-  for (size_t e = 0; e < ne && status == HOC_OK; ++e) {
+  for (size_t e = 0; e < ne; ++e) {
     int f = m->elem_face[e];
-    tangled[f] += t[e];
+    if (tangled) tangled[f] += q[e] == 0.0;
     if (!(q[e] >= min[f])) min[f] = q[e];
   }
-  free(q);
-  free(t);
+}
+
+/* The q of a raise placed at the feet on the faces flagged in feet_faces
+ * (hoc_mesh_elevate_feet), known from two others of the same source: qf
+ * on those faces' elements (a placement at the feet on at least those
+ * faces), qs (straight) on the others; measured again on the others that
+ * have nodes on curves along those faces. */
+static hoc_status raise_quality(const hoc_run *run, const hoc_mesh *m,
+                                const unsigned char *feet_faces, const double *qf, double *qs) {
+  size_t ne = hoc_mesh_num_elements(m), np = (size_t)m->np;
+  unsigned char *curves = hoc_calloc((size_t)m->model->n_curves + 1, 1), *again = hoc_calloc(ne + 1, 1);
+  hoc_status status = HOC_OK;
+  if (!curves || !again) status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
+  if (status == HOC_OK) hoc_mesh_feet_curves(m, feet_faces, curves);
+  for (size_t e = 0; e < ne && status == HOC_OK; ++e) {
+    if (feet_faces[m->elem_face[e]]) {
+      qs[e] = qf[e];
+      continue;
+    }
+    for (size_t k = 3; k < np; ++k) {
+      size_t i = m->conn[e * np + k];
+      if (m->dim[i] == HOC_ON_CURVE && curves[m->entity[i]]) again[e] = 1;
+    }
+  }
+  if (status == HOC_OK) status = hoc_mesh_measure_some(m, run->o.measure, again, qs);
+  free(curves);
+  free(again);
   return status;
 }
 
-hoc_status hoc_pipeline_raise(const hoc_run *run, const hoc_mesh *in, int order, hoc_mesh **out) {
+hoc_status hoc_pipeline_raise(const hoc_run *run, const hoc_mesh *in, int order, hoc_mesh **out,
+                              double *q) {
   hoc_nodeset set = run->o.nodeset;
+  hoc_measure measure = run->o.measure;
   HOC_TRY(hoc_mesh_elevate(in, order, set, out));
-  if (order < 2) return HOC_OK;
+  size_t ne = hoc_mesh_num_elements(in);
   int nf = hoc_model_num_faces(in->model);
   hoc_mesh *feet = NULL;
   size_t *tangled = hoc_calloc(2 * (size_t)nf + 1, sizeof *tangled);
-  double *min = hoc_calloc(2 * (size_t)nf + 1, sizeof *min);
-  unsigned char *take = hoc_calloc((size_t)nf + 1, 1);
+  double *min = hoc_calloc(3 * (size_t)nf + 1, sizeof *min);
+  unsigned char *flag = hoc_calloc((size_t)nf + 1, 1), *take = hoc_calloc((size_t)nf + 1, 1);
+  unsigned char *elems = hoc_calloc(ne + 1, 1);
+  double *qs = hoc_calloc(2 * ne + 1, sizeof *qs), *qf = qs + ne;
   hoc_status status = HOC_OK;
-  if (!tangled || !min || !take) {
+  if (!tangled || !min || !flag || !take || !elems || !qs) {
     status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
     goto done;
   }
-  for (int f = 0; f < nf; ++f) take[f] = 1;
-  HOC_TRY_GOTO(hoc_mesh_elevate_feet(in, order, set, take, &feet), done);
-  HOC_TRY_GOTO(face_quality(run, *out, tangled, min), done);
-  HOC_TRY_GOTO(face_quality(run, feet, tangled + nf, min + nf), done);
+  HOC_TRY_GOTO(hoc_mesh_measure(*out, measure, qs, NULL, NULL), done);
+  if (order < 2) goto done;
+  /* the feet are tried on the faces whose straight elements tangle or
+   * lose q against the source's (HOC_PIPELINE_FOOT_GAIN) */
+  HOC_TRY_GOTO(hoc_mesh_measure(in, measure, qf, NULL, NULL), done);
+  face_quality(in, qf, NULL, min + 2 * nf);
+  face_quality(*out, qs, tangled, min);
+  int n_flag = 0;
+  for (int f = 0; f < nf; ++f) {
+    flag[f] = tangled[f] > 0 ||
+              min[f] < min[2 * nf + f] - HOC_PIPELINE_FOOT_GAIN * fabs(min[2 * nf + f]);
+    n_flag += flag[f];
+  }
+  if (!n_flag) goto done;
+  HOC_TRY_GOTO(hoc_mesh_elevate_feet(in, order, set, flag, &feet), done);
+  for (size_t e = 0; e < ne; ++e) elems[e] = flag[in->elem_face[e]];
+  HOC_TRY_GOTO(hoc_mesh_measure_some(feet, measure, elems, qf), done);
+  face_quality(feet, qf, tangled + nf, min + nf);
   int n_take = 0;
   for (int f = 0; f < nf; ++f) {
-    take[f] = tangled[nf + f] < tangled[f] ||
-              (tangled[nf + f] == tangled[f] &&
-               min[nf + f] > min[f] + HOC_PIPELINE_FOOT_GAIN * fabs(min[f]));
+    take[f] = flag[f] && (tangled[nf + f] < tangled[f] ||
+                          (tangled[nf + f] == tangled[f] &&
+                           min[nf + f] > min[f] + HOC_PIPELINE_FOOT_GAIN * fabs(min[f])));
     n_take += take[f];
   }
   if (!n_take) goto done;
-  hoc_mesh_destroy(out);
-  if (n_take == nf) {
+  if (n_take == n_flag) {
+    hoc_mesh_destroy(out);
     *out = feet;
     feet = NULL;
   } else {
-    HOC_TRY_GOTO(hoc_mesh_elevate_feet(in, order, set, take, out), done);
+    HOC_TRY_GOTO(hoc_mesh_take_feet(*out, feet, take), done);
   }
+  HOC_TRY_GOTO(raise_quality(run, *out, take, qf, qs), done);
 done:
+  if (status == HOC_OK && q) memcpy(q, qs, ne * sizeof *q);
   if (status != HOC_OK) hoc_mesh_destroy(out);
   hoc_mesh_destroy(&feet);
   free(tangled);
   free(min);
+  free(flag);
   free(take);
+  free(elems);
+  free(qs);
   return status;
 }
 
@@ -258,12 +307,13 @@ static hoc_status coarse_start(const hoc_run *run, hoc_stages *r, const hoc_mesh
                                hoc_mesh **ho) {
   const hoc_mesh_options *o = &run->o;
   hoc_mesh *coarse = NULL, *raised = NULL;
+  double *q = NULL;
   hoc_status status = HOC_OK;
   HOC_TRY(hoc_run_event(run, HOC_EVENT_PROGRESS, "optimising at order %d first",
                         HOC_PIPELINE_COARSE_ORDER));
   /* the direct raise is measured already: made again only if needed */
   hoc_mesh_destroy(ho);
-  HOC_TRY_GOTO(hoc_pipeline_raise(run, lin, HOC_PIPELINE_COARSE_ORDER, &coarse), done);
+  HOC_TRY_GOTO(hoc_pipeline_raise(run, lin, HOC_PIPELINE_COARSE_ORDER, &coarse, NULL), done);
   HOC_TRY_GOTO(hoc_repair_optimize(run, r, "coarse", coarse, NULL), done);
   if (hoc_stages_last(r)->stage.stats.tangled) {
     HOC_TRY_GOTO(hoc_run_event(run, HOC_EVENT_NOTE,
@@ -272,17 +322,18 @@ static hoc_status coarse_start(const hoc_run *run, hoc_stages *r, const hoc_mesh
                                HOC_PIPELINE_COARSE_ORDER, hoc_stages_last(r)->stage.stats.tangled,
                                o->order),
                  done);
-    HOC_TRY_GOTO(hoc_pipeline_raise(run, lin, o->order, ho), done);
+    HOC_TRY_GOTO(hoc_pipeline_raise(run, lin, o->order, ho, NULL), done);
     goto done;
   }
   double t0 = hoc_pipeline_now();
-  HOC_TRY_GOTO(hoc_pipeline_raise(run, coarse, o->order, &raised), done);
-  HOC_TRY_GOTO(hoc_run_stage(run, r, "re-raised", raised, hoc_pipeline_now() - t0, NULL, NULL),
-               done);
+  HOC_ALLOC_GOTO(q, hoc_mesh_num_elements(coarse) + 1, done);
+  HOC_TRY_GOTO(hoc_pipeline_raise(run, coarse, o->order, &raised, q), done);
+  HOC_TRY_GOTO(hoc_run_stage(run, r, "re-raised", raised, hoc_pipeline_now() - t0, q, NULL), done);
   hoc_mesh_destroy(ho);
   *ho = raised;
   raised = NULL;
 done:
+  free(q);
   hoc_mesh_destroy(&raised);
   hoc_mesh_destroy(&coarse);
   return status;
@@ -296,7 +347,7 @@ static hoc_status mesh_model_run(const hoc_run *run, hoc_model *model, model_mes
   hoc_mesh **attempt[3] = {&m->lin, &m->ho, &m->raised};
   hoc_mesh **kept[3] = {&m->kept_lin, &m->kept_ho, &m->kept_raised};
   hoc_stages kept_r = {0};
-  double *face_size = NULL;
+  double *face_size = NULL, *q = NULL;
   hoc_status status = HOC_OK;
   hoc_linear_options lo;
   hoc_linear_options_default(&lo);
@@ -322,15 +373,17 @@ static hoc_status mesh_model_run(const hoc_run *run, hoc_model *model, model_mes
                                  hoc_mesh_num_elements(m->lin), o->order),
                    done);
       t0 = hoc_pipeline_now();
-      HOC_TRY_GOTO(hoc_pipeline_raise(run, m->lin, o->order, &m->ho), done);
-      HOC_TRY_GOTO(hoc_run_stage(run, r, "high-order", m->ho, hoc_pipeline_now() - t0, NULL, NULL),
+      free(q);
+      HOC_ALLOC_GOTO(q, hoc_mesh_num_elements(m->lin) + 1, done);
+      HOC_TRY_GOTO(hoc_pipeline_raise(run, m->lin, o->order, &m->ho, q), done);
+      HOC_TRY_GOTO(hoc_run_stage(run, r, "high-order", m->ho, hoc_pipeline_now() - t0, q, NULL),
                    done);
       *final = m->ho;
     }
     if (o->optimize && o->order > 1) {
       /* the raised mesh before optimisation, for pictures */
       if (o->keep_stages)
-        HOC_TRY_GOTO(hoc_pipeline_raise(run, m->lin, o->order, &m->raised), done);
+        HOC_TRY_GOTO(hoc_pipeline_raise(run, m->lin, o->order, &m->raised, NULL), done);
       if (o->order >= HOC_PIPELINE_COARSE_FROM) {
         HOC_TRY_GOTO(coarse_start(run, r, m->lin, &m->ho), done);
         *final = m->ho;
@@ -411,6 +464,7 @@ static hoc_status mesh_model_run(const hoc_run *run, hoc_model *model, model_mes
   }
 done:
   free(face_size);
+  free(q);
   return status;
 }
 

@@ -138,8 +138,9 @@ typedef struct hoc_run {
 
 /** The source mesh raised to `order` with the run's node set: the better
  *  of two placements per face (HOC_PIPELINE_FOOT_GAIN), by the run's
- *  measure. */
-hoc_status hoc_pipeline_raise(const hoc_run *run, const hoc_mesh *in, int order, hoc_mesh **out);
+ *  measure. q: NULL, or [elements of in] the q of each element of *out. */
+hoc_status hoc_pipeline_raise(const hoc_run *run, const hoc_mesh *in, int order, hoc_mesh **out,
+                              double *q);
 
 /* The last stage of r (r->n >= 1). */
 static inline hoc_stage_record *hoc_stages_last(hoc_stages *r) { return &r->s[r->n - 1]; }
@@ -156,10 +157,11 @@ hoc_status hoc_run_event(const hoc_run *run, hoc_event_kind kind, const char *fm
     ;
 
 /* Measure `mesh` as a new stage `name` (a static string) of r, made in
- * `seconds`, and tell the caller. q: NULL, or [elements] q of each
- * element; result: NULL, or the optimiser's result the stage is. */
+ * `seconds`, and tell the caller. q: NULL, or [elements] q of each element
+ * by the run's measure, known already (the stage's measure_seconds are then
+ * 0); result: NULL, or the optimiser's result the stage is. */
 hoc_status hoc_run_stage(const hoc_run *run, hoc_stages *r, const char *name, const hoc_mesh *mesh,
-                         double seconds, double *q, const hoc_optimize_result *result);
+                         double seconds, const double *q, const hoc_optimize_result *result);
 
 /* Repairs (repair.c) ------------------------------------------------------ */
 

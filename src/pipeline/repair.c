@@ -371,13 +371,15 @@ static hoc_status replace_nodes(const hoc_run *run, hoc_stages *r, const hoc_mes
                                 hoc_mesh **alt) {
   double t0 = hoc_pipeline_now();
   hoc_mesh *lin = NULL;
-  hoc_status s = hoc_mesh_elevate(mesh, 1, HOC_NODES_EQUISPACED, &lin);
+  double *q = hoc_calloc(hoc_mesh_num_elements(mesh) + 1, sizeof *q);
+  hoc_status s = q ? hoc_mesh_elevate(mesh, 1, HOC_NODES_EQUISPACED, &lin)
+                   : HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
   hoc_run same = *run; /* the input's node set */
   same.o.nodeset = hoc_mesh_nodeset(mesh);
-  if (s == HOC_OK) s = hoc_pipeline_raise(&same, lin, hoc_mesh_order(mesh), alt);
+  if (s == HOC_OK) s = hoc_pipeline_raise(&same, lin, hoc_mesh_order(mesh), alt, q);
   hoc_mesh_destroy(&lin);
-  if (s == HOC_OK)
-    s = hoc_run_stage(run, r, "re-placed", *alt, hoc_pipeline_now() - t0, NULL, NULL);
+  if (s == HOC_OK) s = hoc_run_stage(run, r, "re-placed", *alt, hoc_pipeline_now() - t0, q, NULL);
+  free(q);
   if (s != HOC_OK) {
     hoc_mesh_destroy(alt);
     return s;

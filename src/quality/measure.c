@@ -9,22 +9,23 @@
 #include <string.h>
 #include <time.h>
 
-static double now(void) {
-  struct timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-/* q of every element with tables t, in parallel; normals from the CAD. */
-hoc_status hoc_mesh_measure_tables(const hoc_mesh *mesh, const hoc_quality_tables *t,
-                                   hoc_measure measure, double *q) {
+/* q of the elements flagged in which[n_elems] (all if NULL), in parallel;
+ * normals from the CAD at their slots only. */
+static hoc_status measure_elements(const hoc_mesh *mesh, const hoc_quality_tables *t,
+                                   hoc_measure measure, const unsigned char *which, double *q) {
   size_t ne = mesh->n_elems;
   int np = mesh->np;
-  HOC_CHECK(t->np == np, HOC_ERR_ARGUMENT, "tables of order %d for a mesh of order %d", t->p,
-            mesh->order);
   double *normal;
   HOC_ALLOC(normal, 3 * mesh->n_slots + 3);
-  hoc_status status = hoc_mesh_slot_normals(mesh, normal);
+  unsigned char *slots = NULL;
+  hoc_status status = HOC_OK;
+  if (which) {
+    slots = hoc_calloc(mesh->n_slots + 1, 1);
+    if (!slots) status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
+    for (size_t e = 0; e < ne && slots; ++e)
+      for (int i = 0; i < np && which[e]; ++i) slots[mesh->elem_slot[e * (size_t)np + i]] = 1;
+  }
+  if (status == HOC_OK) status = hoc_mesh_slot_normals_of(mesh, slots, normal);
   int alloc_failed = 0;
   if (status == HOC_OK) {
 #pragma omp parallel
@@ -35,9 +36,9 @@ hoc_status hoc_mesh_measure_tables(const hoc_mesh *mesh, const hoc_quality_table
         alloc_failed = 1;
       }
       double *n = x ? x + 3 * np : NULL;
-#pragma omp for schedule(static)
+#pragma omp for schedule(dynamic, 64)
       for (size_t e = 0; e < ne; ++e) {
-        if (!x) continue;
+        if (!x || (which && !which[e])) continue;
         const size_t *cn = mesh->conn + e * (size_t)np;
         const size_t *sl = mesh->elem_slot + e * (size_t)np;
         for (int i = 0; i < np; ++i) {
@@ -50,9 +51,32 @@ hoc_status hoc_mesh_measure_tables(const hoc_mesh *mesh, const hoc_quality_table
       free(x);
     }
   }
+  free(slots);
   free(normal);
   if (alloc_failed) return HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
   return status;
+}
+
+static double now(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* q of every element with tables t, in parallel; normals from the CAD. */
+hoc_status hoc_mesh_measure_tables(const hoc_mesh *mesh, const hoc_quality_tables *t,
+                                   hoc_measure measure, double *q) {
+  HOC_CHECK(t->np == mesh->np, HOC_ERR_ARGUMENT, "tables of order %d for a mesh of order %d",
+            t->p, mesh->order);
+  return measure_elements(mesh, t, measure, NULL, q);
+}
+
+hoc_status hoc_mesh_measure_some(const hoc_mesh *mesh, hoc_measure measure,
+                                 const unsigned char *elements, double *q) {
+  HOC_CHECK(mesh && elements && q, HOC_ERR_ARGUMENT, "NULL argument");
+  const hoc_quality_tables *t;
+  HOC_TRY(hoc_quality_tables_get(mesh->order, mesh->nodeset, &t));
+  return measure_elements(mesh, t, measure, elements, q);
 }
 
 void hoc_quality_stats_from(const double *q, size_t ne, int order, hoc_quality_stats *stats) {

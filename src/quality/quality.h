@@ -86,6 +86,10 @@ void hoc_quality_tables_destroy(hoc_quality_tables **tables);
 struct hoc_mesh;
 hoc_status hoc_mesh_measure_tables(const struct hoc_mesh *mesh, const hoc_quality_tables *t,
                                    hoc_measure measure, double *q);
+/** q[e] of the elements flagged in elements[n_elems] only (the CAD normals
+ *  at their nodes only); the other q[e] are left as they are. */
+hoc_status hoc_mesh_measure_some(const struct hoc_mesh *mesh, hoc_measure measure,
+                                 const unsigned char *elements, double *q);
 
 /** Statistics of q[ne] (seconds left 0). */
 void hoc_quality_stats_from(const double *q, size_t ne, int order, hoc_quality_stats *stats);
