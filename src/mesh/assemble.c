@@ -355,11 +355,12 @@ fail:
   return status;
 }
 
-/* Parameters of every slot on its face; checked against the node position:
+/* Parameters of every slot on its face (of the nodes flagged in which, if
+ * not NULL: their pole flags are left); checked against the node position:
  * a slot farther than `tol` moves to the face's nearest point, one farther
  * than `refuse` fails (given meshes). */
 static hoc_status slot_params(hoc_mesh *m, const hoc_mesh_source *src, double tol,
-                              double refuse) {
+                              double refuse, const unsigned char *which) {
   const hoc_model *model = m->model;
   /* group the curve slots by (curve, face) for batched reparametrisation */
   size_t n = m->n_slots;
@@ -368,6 +369,7 @@ static hoc_status slot_params(hoc_mesh *m, const hoc_mesh_source *src, double to
   size_t cnt = 0;
   for (size_t s = 0; s < n; ++s) {
     size_t i = m->slot_node[s];
+    if (which && !which[i]) continue;
     if (m->dim[i] == HOC_ON_FACE) {
       memcpy(m->slot_uv + 2 * s, m->param + 2 * i, 2 * sizeof(double));
     } else if (m->dim[i] == HOC_ON_VERTEX) {
@@ -440,7 +442,7 @@ static hoc_status slot_params(hoc_mesh *m, const hoc_mesh_source *src, double to
   /* verify: phi_f(slot uv) must be the node; repair by local inversion or projection */
   for (size_t s = 0; s < n; ++s) {
     size_t i = m->slot_node[s];
-    if (m->dim[i] == HOC_ON_FACE) continue;
+    if (m->dim[i] == HOC_ON_FACE || (which && !which[i])) continue;
     int f = m->slot_face[s];
     const hoc_cad_face *face = &model->faces[f];
     double *p = m->slot_uv + 2 * s, x[3], d = INFINITY;
@@ -484,7 +486,7 @@ static hoc_status slot_params(hoc_mesh *m, const hoc_mesh_source *src, double to
     }
   }
   /* poles: a coordinate is arbitrary where the node sits on a degenerate side */
-  for (size_t s = 0; s < n; ++s) {
+  for (size_t s = 0; s < n && !which; ++s) {
     const hoc_cad_face *f = &model->faces[m->slot_face[s]];
     const double *p = m->slot_uv + 2 * s;
     for (int side = 0; side < 4; ++side) {
@@ -746,6 +748,16 @@ hoc_status hoc_mesh_assemble(hoc_model *model, const hoc_mesh_source *given, dou
   return status;
 }
 
+hoc_status hoc_mesh_move_nodes(hoc_mesh *m, const unsigned char *which) {
+  HOC_CHECK(m && which, HOC_ERR_ARGUMENT, "no mesh or no nodes given");
+  hoc_mesh_source none = {0};
+  HOC_TRY(hoc_mesh_update_xyz_of(m, which));
+  HOC_TRY(slot_params(m, &none, INFINITY, INFINITY, which));
+  hoc_mesh_element_params(m);
+  hoc_mesh_per_element_pole_params(m);
+  return HOC_OK;
+}
+
 static hoc_status assemble(hoc_model *model, const hoc_mesh_source *src, double tolerance,
                            hoc_mesh **out) {
   HOC_CHECK(src->xyz || src->param, HOC_ERR_ARGUMENT, "nodes have neither positions nor parameters");
@@ -829,7 +841,7 @@ static hoc_status assemble(hoc_model *model, const hoc_mesh_source *src, double 
   }
   if (given && src->keep_xyz) memcpy(m->xyz, given, 3 * src->n_nodes * sizeof *given);
   HOC_TRY_GOTO(build_slots(m), fail);
-  HOC_TRY_GOTO(slot_params(m, src, tol, src->given ? 2 * limit : INFINITY), fail);
+  HOC_TRY_GOTO(slot_params(m, src, tol, src->given ? 2 * limit : INFINITY, NULL), fail);
   HOC_TRY_GOTO(hoc_mesh_split_pole_slots(m), fail);
   hoc_mesh_element_params(m);
   hoc_mesh_per_element_pole_params(m);

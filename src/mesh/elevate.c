@@ -242,7 +242,8 @@ static hoc_status foot_move(const hoc_model *model, const foot_targets *t, hoc_n
  * mesh this is the paper's placement (straight in (u,v)); from a curved mesh
  * it keeps the curved geometry. */
 static hoc_status reinterpolate(const hoc_mesh *in, int p, hoc_nodeset set,
-                                const unsigned char *face_foot, hoc_mesh **out) {
+                                const unsigned char *face_foot, const hoc_mesh *straight,
+                                hoc_mesh **out) {
   const hoc_model *model = in->model;
   int np = hoc_tri_num_nodes(p), npi = in->np, pin = in->order;
   size_t ne = in->n_elems;
@@ -443,6 +444,20 @@ static hoc_status reinterpolate(const hoc_mesh *in, int p, hoc_nodeset set,
     }
   }
   if (face_foot) HOC_TRY_GOTO(foot_move(model, &foot, &b), done);
+  if (face_foot && straight) {
+    /* the straight raise with the nodes at the feet moved */
+    if (straight->n_nodes != b.n || straight->n_elems != ne ||
+        memcmp(straight->conn, conn, ne * (size_t)np * sizeof *conn) != 0) {
+      status = HOC_ERROR(HOC_ERR_MISMATCH, "the straight raise is not of this source");
+      goto done;
+    }
+    HOC_TRY_GOTO(hoc_mesh_copy(straight, out), done);
+    for (size_t i = 0; i < b.n && i < foot.cap; ++i)
+      if (foot.want[i]) memcpy((*out)->param + 2 * i, b.par + 2 * i, 2 * sizeof *b.par);
+    status = hoc_mesh_move_nodes(*out, foot.want);
+    if (status != HOC_OK) hoc_mesh_destroy(out);
+    goto done;
+  }
   /* lines of order p along the curve edges that elements use */
   size_t nl = 0;
   HOC_ALLOC_GOTO(lconn, in->n_lines * (size_t)(p + 1) + 1, done);
@@ -526,7 +541,7 @@ hoc_status hoc_mesh_elevate(const hoc_mesh *in, int order, hoc_nodeset set, hoc_
   HOC_CHECK(order >= 1 && order <= HOC_MAX_ORDER, HOC_ERR_ARGUMENT,
             "order %d out of range 1..%d", order, HOC_MAX_ORDER);
   HOC_TRY(check_set(set));
-  return reinterpolate(in, order, set, NULL, out);
+  return reinterpolate(in, order, set, NULL, NULL, out);
 }
 
 hoc_status hoc_mesh_elevate_feet(const hoc_mesh *in, int order, hoc_nodeset set,
@@ -537,7 +552,7 @@ hoc_status hoc_mesh_elevate_feet(const hoc_mesh *in, int order, hoc_nodeset set,
   HOC_CHECK(order >= 1 && order <= HOC_MAX_ORDER, HOC_ERR_ARGUMENT,
             "order %d out of range 1..%d", order, HOC_MAX_ORDER);
   HOC_TRY(check_set(set));
-  return reinterpolate(in, order, set, face_foot, out);
+  return reinterpolate(in, order, set, face_foot, NULL, out);
 }
 
 void hoc_mesh_feet_curves(const hoc_mesh *m, const unsigned char *faces, unsigned char *curves) {
@@ -583,6 +598,15 @@ hoc_status hoc_mesh_take_feet(hoc_mesh *m, const hoc_mesh *feet, const unsigned 
   return HOC_OK;
 }
 
+hoc_status hoc_mesh_elevate_feet_from(const hoc_mesh *in, const hoc_mesh *straight,
+                                      const unsigned char *face_foot, hoc_mesh **out) {
+  HOC_CHECK(out, HOC_ERR_ARGUMENT, "mesh output is NULL");
+  *out = NULL;
+  HOC_CHECK(in && straight && face_foot, HOC_ERR_ARGUMENT, "no mesh or no faces given");
+  HOC_CHECK(straight->model == in->model, HOC_ERR_MISMATCH, "the straight raise is not of this source");
+  return reinterpolate(in, straight->order, straight->nodeset, face_foot, straight, out);
+}
+
 hoc_status hoc_mesh_convert(const hoc_mesh *in, hoc_nodeset set, hoc_mesh **out) {
   return hoc_mesh_convert_nodeset(in, set, out);
 }
@@ -592,5 +616,5 @@ hoc_status hoc_mesh_convert_nodeset(const hoc_mesh *in, hoc_nodeset set, hoc_mes
   *out = NULL;
   HOC_CHECK(in, HOC_ERR_ARGUMENT, "no mesh given");
   HOC_TRY(check_set(set));
-  return reinterpolate(in, in->order, set, NULL, out);
+  return reinterpolate(in, in->order, set, NULL, NULL, out);
 }

@@ -140,6 +140,12 @@ double hoc_mesh_collapse_distance(const hoc_model *model);
  *  projection fails). hocad's own meshes are never refused. */
 hoc_status hoc_mesh_assemble(hoc_model *model, const hoc_mesh_source *src, double tolerance,
                              hoc_mesh **mesh);
+/** After the parameters of the nodes flagged in which[n_nodes] changed:
+ *  their positions, their slots' parameters on the faces around and every
+ *  element's parameters made again, as hoc_mesh_assemble (tolerance
+ *  INFINITY, hocad's own mesh) makes them; face_gap grows to cover the
+ *  moved slots. The nodes must not be at a pole (their pole flags stay). */
+hoc_status hoc_mesh_move_nodes(hoc_mesh *m, const unsigned char *which);
 
 /* Steps of hoc_mesh_assemble once the slots are built (poles.c), in order. */
 /** One slot per element at each pole slot shared with other faces: the
@@ -171,6 +177,12 @@ hoc_status hoc_mesh_alloc(hoc_model *model, int order, size_t n_nodes, size_t n_
  *  the parameter-space rules. */
 hoc_status hoc_mesh_elevate_feet(const hoc_mesh *in, int order, hoc_nodeset set,
                                  const unsigned char *face_foot, hoc_mesh **out);
+/** The same from straight, in's hoc_mesh_elevate with the same order and
+ *  set: a copy of it with the nodes at the feet moved (hoc_mesh_move_nodes)
+ *  instead of a mesh assembled anew; the same mesh but for face_gap, which
+ *  is the larger of the two placements'. */
+hoc_status hoc_mesh_elevate_feet_from(const hoc_mesh *in, const hoc_mesh *straight,
+                                      const unsigned char *face_foot, hoc_mesh **out);
 /** m (hoc_mesh_elevate of a source) becomes hoc_mesh_elevate_feet of that
  *  source with face_foot = take, its nodes copied from feet, the source's
  *  hoc_mesh_elevate_feet with face_foot flagging at least the faces of

@@ -231,7 +231,7 @@ hoc_status hoc_pipeline_raise(const hoc_run *run, const hoc_mesh *in, int order,
     n_flag += flag[f];
   }
   if (!n_flag) goto done;
-  HOC_TRY_GOTO(hoc_mesh_elevate_feet(in, order, set, flag, &feet), done);
+  HOC_TRY_GOTO(hoc_mesh_elevate_feet_from(in, *out, flag, &feet), done);
   for (size_t e = 0; e < ne; ++e) elems[e] = flag[in->elem_face[e]];
   HOC_TRY_GOTO(hoc_mesh_measure_some(feet, measure, elems, qf), done);
   face_quality(feet, qf, tangled + nf, min + nf);
