@@ -46,10 +46,13 @@
  * optimisation leaves elements tangled, the direct raise is used. */
 #define HOC_PIPELINE_COARSE_FROM 6
 /* Every raise (hoc_pipeline_raise) places the new nodes straight in each
- * face's (u, v) and, a second time, at the feet of the source elements'
- * points (hoc_mesh_elevate_feet); a face takes the feet where they tangle
- * fewer of its elements, or as many and raise its min q by more than this
- * share. Straight in (u, v) is the better start where the parametrisation
+ * face's (u, v); on the faces where that tangles elements or lowers the
+ * face's min q by more than this share against the source, a second time
+ * at the feet of the source elements' points (hoc_mesh_elevate_feet_from),
+ * and such a face takes the feet where they tangle fewer of its elements,
+ * or as many and raise its min q by more than this share. The feet exist
+ * to undo a loss the parametrisation causes: where straight in (u, v)
+ * loses nothing, they are not tried. Straight in (u, v) is the better start where the parametrisation
  * is even and the elements coarse against the curvature (feet of a flat
  * triangle crowd toward its middle); the feet where the parametrisation
  * varies within an element (fuselage_occ28366: a knot at u = 2 where
