@@ -314,7 +314,8 @@ typedef struct hoc_quality_stats {
   size_t tangled;             /**< elements with sigma <= 0 somewhere: at a quadrature point, a
                                    node or a lattice point, or between them by the exact fold
                                    tests (docs/quality.md) */
-  double seconds;  /**< wall time of the measurement */
+  double seconds;  /**< wall time of the measurement (0 in a stage whose q came with making
+                        it: the raises "high-order", "re-raised" and "re-placed") */
 } hoc_quality_stats;
 
 /** Measure every element with Definition 2 of the paper (surface high-order
@@ -516,7 +517,9 @@ typedef struct hoc_stage {
                          "smoothed" or "written" (a static string) */
   hoc_quality_stats stats; /**< q of the stage's mesh */
   double seconds;          /**< wall time the pipeline took to make the stage (an "input"
-                                stage: to copy it), its measurement (stats.seconds) apart */
+                                stage: to copy it), its measurement (stats.seconds) apart;
+                                a raise measures as it chooses its placement, and its
+                                seconds include that */
   int optimized;           /**< the stage is an optimiser's result: the fields below are set */
   int iterations;          /**< the optimiser's sweeps */
   int converged;           /**< hoc_optimize_result.converged */

@@ -11,6 +11,7 @@
  * points, so every raised element is affine and keeps its linear q.
  * SPDX-License-Identifier: GPL-2.0-or-later */
 #include "cad/cad.h"
+#include "core/geometry.h"
 #include "mesh/mesh.h"
 #include "pipeline/pipeline.h"
 #include "test_util.h"
@@ -208,6 +209,41 @@ done:
   hoc_model_destroy(&m);
 }
 
+/* Moving nodes in place (hoc_mesh_move_nodes, the feet's placement as a
+ * copy of the straight one) keeps the pole flags: it tells where a moved
+ * node lands on a pole side, and hoc_mesh_elevate_feet_from then
+ * assembles the mesh afresh. On the sphere (poles at v = +-pi/2). */
+static void test_move_onto_pole(void) {
+  hoc_model *m = NULL;
+  CHECK_OK(hoc_cad_create_analytic(HOC_ANALYTIC_SPHERE, 1.0, 0, &m));
+  if (!m) return;
+  hoc_mesh *lin = NULL, *ho = NULL;
+  CHECK_OK(hoc_mesh_grid_linear(m, 6, 4, &lin));
+  if (lin) CHECK_OK(hoc_mesh_elevate(lin, 2, HOC_NODES_EQUISPACED, &ho));
+  unsigned char *which = ho ? calloc(ho->n_nodes, 1) : NULL;
+  size_t i = 0;
+  while (ho && i < ho->n_nodes && ho->dim[i] != HOC_ON_FACE) ++i;
+  if (!which || i == ho->n_nodes) {
+    CHECK(0);
+  } else {
+    which[i] = 1;
+    int at_pole = 1;
+    ho->param[2 * i + 1] *= 0.9; /* off any pole */
+    CHECK_OK(hoc_mesh_move_nodes(ho, which, &at_pole));
+    CHECK(at_pole == 0);
+    double x[3];
+    CHECK_OK(hoc_cad_face_eval(m, 0, 1, ho->param + 2 * i, x, NULL, NULL));
+    CHECK(hoc_dist3(x, ho->xyz + 3 * i) == 0);
+    ho->param[2 * i + 1] = acos(-1.0) / 2; /* onto the north pole */
+    CHECK_OK(hoc_mesh_move_nodes(ho, which, &at_pole));
+    CHECK(at_pole == 1);
+  }
+  free(which);
+  hoc_mesh_destroy(&lin);
+  hoc_mesh_destroy(&ho);
+  hoc_model_destroy(&m);
+}
+
 /* Where the parametrisation is even and the elements coarse against the
  * curvature (a torus, 6 x 4 elements around), straight in (u, v) is the
  * better start; the raise keeps, per face, whichever is better, so it is
@@ -246,5 +282,6 @@ int main(void) {
   test_kinked_plane(8);
   test_never_worse();
   test_take_feet_is_a_raise();
+  test_move_onto_pole();
   return test_report();
 }

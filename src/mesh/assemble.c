@@ -356,11 +356,12 @@ fail:
 }
 
 /* Parameters of every slot on its face (of the nodes flagged in which, if
- * not NULL: their pole flags are left); checked against the node position:
- * a slot farther than `tol` moves to the face's nearest point, one farther
- * than `refuse` fails (given meshes). */
+ * not NULL: their pole flags are left, and *pole_moved set where one would
+ * change); checked against the node position: a slot farther than `tol`
+ * moves to the face's nearest point, one farther than `refuse` fails
+ * (given meshes). */
 static hoc_status slot_params(hoc_mesh *m, const hoc_mesh_source *src, double tol,
-                              double refuse, const unsigned char *which) {
+                              double refuse, const unsigned char *which, int *pole_moved) {
   const hoc_model *model = m->model;
   /* group the curve slots by (curve, face) for batched reparametrisation */
   size_t n = m->n_slots;
@@ -486,15 +487,21 @@ static hoc_status slot_params(hoc_mesh *m, const hoc_mesh_source *src, double to
     }
   }
   /* poles: a coordinate is arbitrary where the node sits on a degenerate side */
-  for (size_t s = 0; s < n && !which; ++s) {
+  for (size_t s = 0; s < n; ++s) {
+    if (which && !which[m->slot_node[s]]) continue;
     const hoc_cad_face *f = &model->faces[m->slot_face[s]];
     const double *p = m->slot_uv + 2 * s;
+    unsigned char pole = 0;
     for (int side = 0; side < 4; ++side) {
       if (!f->pole[side]) continue;
       int d = side / 2;
       double at = side % 2 ? f->hi[d] : f->lo[d], range = f->hi[d] - f->lo[d];
-      if (fabs(p[d] - at) <= 1e-9 * range + 1e-300) m->slot_pole[s] |= (unsigned char)(1 << (1 - d));
+      if (fabs(p[d] - at) <= 1e-9 * range + 1e-300) pole |= (unsigned char)(1 << (1 - d));
     }
+    if (!which)
+      m->slot_pole[s] |= pole;
+    else if ((m->slot_pole[s] | pole) != m->slot_pole[s])
+      *pole_moved = 1;
   }
 done:
   free(order);
@@ -748,11 +755,12 @@ hoc_status hoc_mesh_assemble(hoc_model *model, const hoc_mesh_source *given, dou
   return status;
 }
 
-hoc_status hoc_mesh_move_nodes(hoc_mesh *m, const unsigned char *which) {
-  HOC_CHECK(m && which, HOC_ERR_ARGUMENT, "no mesh or no nodes given");
+hoc_status hoc_mesh_move_nodes(hoc_mesh *m, const unsigned char *which, int *at_pole) {
+  HOC_CHECK(m && which && at_pole, HOC_ERR_ARGUMENT, "no mesh or no nodes given");
   hoc_mesh_source none = {0};
+  *at_pole = 0;
   HOC_TRY(hoc_mesh_update_xyz_of(m, which));
-  HOC_TRY(slot_params(m, &none, INFINITY, INFINITY, which));
+  HOC_TRY(slot_params(m, &none, INFINITY, INFINITY, which, at_pole));
   hoc_mesh_element_params(m);
   hoc_mesh_per_element_pole_params(m);
   return HOC_OK;
@@ -841,7 +849,7 @@ static hoc_status assemble(hoc_model *model, const hoc_mesh_source *src, double 
   }
   if (given && src->keep_xyz) memcpy(m->xyz, given, 3 * src->n_nodes * sizeof *given);
   HOC_TRY_GOTO(build_slots(m), fail);
-  HOC_TRY_GOTO(slot_params(m, src, tol, src->given ? 2 * limit : INFINITY, NULL), fail);
+  HOC_TRY_GOTO(slot_params(m, src, tol, src->given ? 2 * limit : INFINITY, NULL, NULL), fail);
   HOC_TRY_GOTO(hoc_mesh_split_pole_slots(m), fail);
   hoc_mesh_element_params(m);
   hoc_mesh_per_element_pole_params(m);

@@ -443,20 +443,25 @@ static hoc_status reinterpolate(const hoc_mesh *in, int p, hoc_nodeset set,
       if (to_foot && cusp < 0) foot_set(&foot, out_cn[k], npi, Nk, in->xyz, cn, tol);
     }
   }
+  if (straight && (straight->n_nodes != b.n || straight->n_elems != ne ||
+                   memcmp(straight->conn, conn, ne * (size_t)np * sizeof *conn) != 0)) {
+    status = HOC_ERROR(HOC_ERR_MISMATCH, "the straight raise is not of this source");
+    goto done;
+  }
   if (face_foot) HOC_TRY_GOTO(foot_move(model, &foot, &b), done);
-  if (face_foot && straight) {
-    /* the straight raise with the nodes at the feet moved */
-    if (straight->n_nodes != b.n || straight->n_elems != ne ||
-        memcmp(straight->conn, conn, ne * (size_t)np * sizeof *conn) != 0) {
-      status = HOC_ERROR(HOC_ERR_MISMATCH, "the straight raise is not of this source");
-      goto done;
-    }
+  if (face_foot && straight && b.n <= foot.cap) {
+    /* the straight raise with the nodes at the feet moved; assembled
+     * afresh below if one lands on a pole side */
+    int at_pole = 0;
     HOC_TRY_GOTO(hoc_mesh_copy(straight, out), done);
     for (size_t i = 0; i < b.n && i < foot.cap; ++i)
       if (foot.want[i]) memcpy((*out)->param + 2 * i, b.par + 2 * i, 2 * sizeof *b.par);
-    status = hoc_mesh_move_nodes(*out, foot.want);
-    if (status != HOC_OK) hoc_mesh_destroy(out);
-    goto done;
+    status = hoc_mesh_move_nodes(*out, foot.want, &at_pole);
+    if (status != HOC_OK || !at_pole) {
+      if (status != HOC_OK) hoc_mesh_destroy(out);
+      goto done;
+    }
+    hoc_mesh_destroy(out);
   }
   /* lines of order p along the curve edges that elements use */
   size_t nl = 0;
@@ -603,7 +608,8 @@ hoc_status hoc_mesh_elevate_feet_from(const hoc_mesh *in, const hoc_mesh *straig
   HOC_CHECK(out, HOC_ERR_ARGUMENT, "mesh output is NULL");
   *out = NULL;
   HOC_CHECK(in && straight && face_foot, HOC_ERR_ARGUMENT, "no mesh or no faces given");
-  HOC_CHECK(straight->model == in->model, HOC_ERR_MISMATCH, "the straight raise is not of this source");
+  HOC_CHECK(straight->model == in->model, HOC_ERR_MISMATCH,
+            "the straight raise is not of this source");
   return reinterpolate(in, straight->order, straight->nodeset, face_foot, straight, out);
 }
 

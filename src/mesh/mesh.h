@@ -144,8 +144,9 @@ hoc_status hoc_mesh_assemble(hoc_model *model, const hoc_mesh_source *src, doubl
  *  their positions, their slots' parameters on the faces around and every
  *  element's parameters made again, as hoc_mesh_assemble (tolerance
  *  INFINITY, hocad's own mesh) makes them; face_gap grows to cover the
- *  moved slots. The nodes must not be at a pole (their pole flags stay). */
-hoc_status hoc_mesh_move_nodes(hoc_mesh *m, const unsigned char *which);
+ *  moved slots. Pole flags stay: *at_pole is set where a moved slot lands
+ *  on a pole side (the mesh is then not the assembled one). */
+hoc_status hoc_mesh_move_nodes(hoc_mesh *m, const unsigned char *which, int *at_pole);
 
 /* Steps of hoc_mesh_assemble once the slots are built (poles.c), in order. */
 /** One slot per element at each pole slot shared with other faces: the
@@ -178,9 +179,10 @@ hoc_status hoc_mesh_alloc(hoc_model *model, int order, size_t n_nodes, size_t n_
 hoc_status hoc_mesh_elevate_feet(const hoc_mesh *in, int order, hoc_nodeset set,
                                  const unsigned char *face_foot, hoc_mesh **out);
 /** The same from straight, in's hoc_mesh_elevate with the same order and
- *  set: a copy of it with the nodes at the feet moved (hoc_mesh_move_nodes)
- *  instead of a mesh assembled anew; the same mesh but for face_gap, which
- *  is the larger of the two placements'. */
+ *  set as made (not moved since): a copy of it with the nodes at the feet
+ *  moved (hoc_mesh_move_nodes) instead of a mesh assembled anew (which it
+ *  still is where a foot lands on a pole side); the same mesh but for
+ *  face_gap, which is the larger of the two placements'. */
 hoc_status hoc_mesh_elevate_feet_from(const hoc_mesh *in, const hoc_mesh *straight,
                                       const unsigned char *face_foot, hoc_mesh **out);
 /** m (hoc_mesh_elevate of a source) becomes hoc_mesh_elevate_feet of that

@@ -179,7 +179,8 @@ static void face_quality(const hoc_mesh *m, const double *q, size_t *tangled, do
 static hoc_status raise_quality(const hoc_run *run, const hoc_mesh *m,
                                 const unsigned char *feet_faces, const double *qf, double *qs) {
   size_t ne = hoc_mesh_num_elements(m), np = (size_t)m->np;
-  unsigned char *curves = hoc_calloc((size_t)m->model->n_curves + 1, 1), *again = hoc_calloc(ne + 1, 1);
+  unsigned char *curves = hoc_calloc((size_t)m->model->n_curves + 1, 1);
+  unsigned char *again = hoc_calloc(ne + 1, 1);
   hoc_status status = HOC_OK;
   if (!curves || !again) status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
   if (status == HOC_OK) hoc_mesh_feet_curves(m, feet_faces, curves);
@@ -211,12 +212,13 @@ hoc_status hoc_pipeline_raise(const hoc_run *run, const hoc_mesh *in, int order,
   double *min = hoc_calloc(3 * (size_t)nf + 1, sizeof *min);
   unsigned char *flag = hoc_calloc((size_t)nf + 1, 1), *take = hoc_calloc((size_t)nf + 1, 1);
   unsigned char *elems = hoc_calloc(ne + 1, 1);
-  double *qs = hoc_calloc(2 * ne + 1, sizeof *qs), *qf = qs + ne;
+  double *qs = hoc_calloc(2 * ne + 1, sizeof *qs), *qf = NULL;
   hoc_status status = HOC_OK;
   if (!tangled || !min || !flag || !take || !elems || !qs) {
     status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
     goto done;
   }
+  qf = qs + ne;
   HOC_TRY_GOTO(hoc_mesh_measure(*out, measure, qs, NULL, NULL), done);
   if (order < 2) goto done;
   /* the feet are tried on the faces whose straight elements tangle or

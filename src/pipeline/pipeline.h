@@ -52,11 +52,12 @@
  * and such a face takes the feet where they tangle fewer of its elements,
  * or as many and raise its min q by more than this share. The feet exist
  * to undo a loss the parametrisation causes: where straight in (u, v)
- * loses nothing, they are not tried. Straight in (u, v) is the better start where the parametrisation
- * is even and the elements coarse against the curvature (feet of a flat
- * triangle crowd toward its middle); the feet where the parametrisation
- * varies within an element (fuselage_occ28366: a knot at u = 2 where
- * |phi_u| halves, every element across it folded at order 10). */
+ * loses nothing, they are not tried. Straight in (u, v) is the better
+ * start where the parametrisation is even and the elements coarse against
+ * the curvature (feet of a flat triangle crowd toward its middle); the
+ * feet where the parametrisation varies within an element
+ * (fuselage_occ28366: a knot at u = 2 where |phi_u| halves, every element
+ * across it folded at order 10). */
 #define HOC_PIPELINE_FOOT_GAIN 0.01
 #define HOC_PIPELINE_COARSE_ORDER 3
 /* From this order on, tangled elements left on faces that do not fold
@@ -139,9 +140,10 @@ typedef struct hoc_run {
   hoc_mesh_options o;
 } hoc_run;
 
-/** The source mesh raised to `order` with the run's node set: the better
- *  of two placements per face (HOC_PIPELINE_FOOT_GAIN), by the run's
- *  measure. q: NULL, or [elements of in] the q of each element of *out. */
+/** The source mesh raised to `order` with the run's node set: straight in
+ *  (u, v), or at the feet on the faces where that does better
+ *  (HOC_PIPELINE_FOOT_GAIN), by the run's measure. q: NULL, or [elements
+ *  of in] the q of each element of *out. */
 hoc_status hoc_pipeline_raise(const hoc_run *run, const hoc_mesh *in, int order, hoc_mesh **out,
                               double *q);
 

@@ -74,6 +74,8 @@ hoc_status hoc_mesh_measure_tables(const hoc_mesh *mesh, const hoc_quality_table
 hoc_status hoc_mesh_measure_some(const hoc_mesh *mesh, hoc_measure measure,
                                  const unsigned char *elements, double *q) {
   HOC_CHECK(mesh && elements && q, HOC_ERR_ARGUMENT, "NULL argument");
+  HOC_CHECK(measure == HOC_MEASURE_SHAPE || measure == HOC_MEASURE_ODDY, HOC_ERR_ARGUMENT,
+            "unknown distortion measure %d", (int)measure);
   const hoc_quality_tables *t;
   HOC_TRY(hoc_quality_tables_get(mesh->order, mesh->nodeset, &t));
   return measure_elements(mesh, t, measure, elements, q);
