@@ -3,6 +3,7 @@
  * gmsh_t20_component8.step measured as gmsh measures it (12 elements with a
  * negative Jacobian).
  * SPDX-License-Identifier: GPL-2.0-or-later */
+#include "core/geometry.h"
 #include "mesh/mesh.h"
 #include "quality/quality.h"
 #include "test_util.h"
@@ -640,6 +641,55 @@ out:
   hoc_model_destroy(&model);
 }
 
+/* A curve's parameters on a plane are the feet of its points, in closed
+ * form (the kernel projects the curve onto the plane anew at every call
+ * where the file stores no curve on it: a fifth of an optimisation's time
+ * on impeller_laufrad). Against the kernel, on every plane of a machined
+ * part: the same points of the face to the model's tolerance, and each
+ * the foot of its curve point to rounding. */
+static void test_curve_on_plane(void) {
+  hoc_model *model = open_bundled("nist_ctc_01_asme1_rd.stp");
+  if (!model) return;
+  double tolerance = 0;
+  CHECK_OK(hoc_cad_tolerance(model, &tolerance));
+  int planes = 0, checked = 0;
+  double worst_kernel = 0, worst_foot = 0;
+  for (int f = 0; f < model->n_faces; ++f) {
+    const hoc_cad_face *face = &model->faces[f];
+    if (strcmp(face->type, "Plane") != 0) continue;
+    ++planes;
+    CHECK(face->plane);
+    for (int k = 0; k < face->n_curves; ++k) {
+      int c = hoc_cad_curve_index(model, abs(face->curves[k]));
+      if (c < 0) continue;
+      const hoc_cad_curve *cv = &model->curves[c];
+      double t[5], x[15], uv[10], uk[10], y[15], yk[15], du[15], dv[15];
+      for (int i = 0; i < 5; ++i) t[i] = cv->lo + (cv->hi - cv->lo) * (0.1 + 0.2 * i);
+      CHECK_OK(hoc_cad_curve_eval(model, c, 5, t, x, NULL));
+      CHECK_OK(hoc_cad_curve_to_face(model, c, f, 5, t, uv));
+      CHECK_OK(model->ops->curve_to_face(model->ctx, cv, face, 5, t, uk));
+      CHECK_OK(hoc_cad_face_eval(model, f, 5, uv, y, du, dv));
+      CHECK_OK(hoc_cad_face_eval(model, f, 5, uk, yk, NULL, NULL));
+      for (int i = 0; i < 5; ++i) {
+        double r[3];
+        for (int d = 0; d < 3; ++d) r[d] = x[3 * i + d] - y[3 * i + d];
+        worst_kernel = fmax(worst_kernel, hoc_dist3(y + 3 * i, yk + 3 * i));
+        const double *a = du + 3 * i, *b = dv + 3 * i;
+        worst_foot = fmax(worst_foot, fabs(hoc_dot3(r, a)) / sqrt(hoc_dot3(a, a)));
+        worst_foot = fmax(worst_foot, fabs(hoc_dot3(r, b)) / sqrt(hoc_dot3(b, b)));
+      }
+      ++checked;
+    }
+  }
+  printf("nist_ctc_01: %d planes, %d curves on them: points %.2g from the kernel's (tolerance "
+         "%.2g), feet to %.2g\n",
+         planes, checked, worst_kernel, tolerance, worst_foot);
+  CHECK(planes > 0 && checked > 0);
+  CHECK(worst_kernel <= tolerance + 1e-12 * model->diagonal);
+  CHECK(worst_foot <= 1e-12 * model->diagonal);
+  hoc_model_destroy(&model);
+}
+
 int main(void) {
   test_split_on_curves();
   test_two_faces_one_edge();
@@ -652,5 +702,6 @@ int main(void) {
   test_model("screw.step", 0.2);
   test_model("periodic_u_cst.step", 0.2);
   test_gmsh_order3_t20();
+  test_curve_on_plane();
   return test_report();
 }

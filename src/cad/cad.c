@@ -111,6 +111,36 @@ static hoc_status detect_face_topology(hoc_model *m, hoc_cad_face *f, double tol
   return HOC_OK;
 }
 
+/* Whether face f, of the kernel's type "Plane", is phi = o + u a + v b to
+ * rounding (at its corners and middle): then its frame is kept. */
+static hoc_status detect_plane(hoc_model *m, hoc_cad_face *f) {
+  if (strcmp(f->type, "Plane") != 0) return HOC_OK;
+  double uv[6] = {f->lo[0], f->lo[1], f->hi[0], f->hi[1], 0.5 * (f->lo[0] + f->hi[0]),
+                  0.5 * (f->lo[1] + f->hi[1])};
+  double x[9], du[9], dv[9];
+  HOC_TRY(m->ops->face_eval(m->ctx, f, 3, uv, x, du, dv));
+  double o[3], tol = 1e-12 * m->diagonal;
+  for (int d = 0; d < 3; ++d) o[d] = x[d] - uv[0] * du[d] - uv[1] * dv[d];
+  for (int k = 1; k < 3; ++k)
+    for (int d = 0; d < 3; ++d) {
+      double p = o[d] + uv[2 * k] * du[d] + uv[2 * k + 1] * dv[d];
+      if (!(fabs(p - x[3 * k + d]) <= tol + 1e-14 * fabs(x[3 * k + d])) ||
+          !(fabs(du[3 * k + d] - du[d]) <= 1e-12 * (fabs(du[d]) + 1)) ||
+          !(fabs(dv[3 * k + d] - dv[d]) <= 1e-12 * (fabs(dv[d]) + 1)))
+        return HOC_OK;
+    }
+  double aa = hoc_dot3(du, du), ab = hoc_dot3(du, dv), bb = hoc_dot3(dv, dv), det = aa * bb - ab * ab;
+  if (!(det > 1e-12 * aa * bb)) return HOC_OK;
+  memcpy(f->plane_o, o, sizeof o);
+  memcpy(f->plane_a, du, 3 * sizeof *du);
+  memcpy(f->plane_b, dv, 3 * sizeof *dv);
+  f->plane_g[0] = bb / det;
+  f->plane_g[1] = -ab / det;
+  f->plane_g[2] = aa / det;
+  f->plane = 1;
+  return HOC_OK;
+}
+
 hoc_status hoc_cad_finish(hoc_model *m) {
   HOC_TRY(build_lookup(m->n_faces, &m->faces[0].tag, sizeof(hoc_cad_face), &m->face_of_tag,
                        &m->max_face_tag));
@@ -130,6 +160,7 @@ hoc_status hoc_cad_finish(hoc_model *m) {
                   isfinite(f->hi[1]) && f->hi[0] >= f->lo[0] && f->hi[1] >= f->lo[1],
               HOC_ERR_CAD, "face %d has invalid parametric bounds", f->tag);
     HOC_TRY(detect_face_topology(m, f, tol));
+    HOC_TRY(detect_plane(m, f));
   }
   for (int i = 0; i < m->n_curves; ++i) {
     hoc_cad_curve *c = &m->curves[i];
@@ -150,6 +181,9 @@ hoc_status hoc_cad_finish(hoc_model *m) {
 
 enum { GAP_SAMPLES = 33 };
 
+static hoc_status curve_to_face(const hoc_model *m, int curve, int face, size_t n,
+                                const double *t, double *uv, int kernel);
+
 /* Largest distance between curve c and face f along the curve. Samples
  * cluster at the curve's ends, where a curve and its face part most (the
  * intersection curves of wing_fuselage.step peak within 0.4% of their
@@ -165,7 +199,7 @@ static double curve_face_gap(const hoc_model *m, int c, int f) {
   }
   double gap = 0;
   if (hoc_cad_curve_eval(m, c, GAP_SAMPLES, t, x, NULL) != HOC_OK ||
-      hoc_cad_curve_to_face(m, c, f, GAP_SAMPLES, t, uv) != HOC_OK ||
+      curve_to_face(m, c, f, GAP_SAMPLES, t, uv, 1) != HOC_OK ||
       hoc_cad_face_eval(m, f, GAP_SAMPLES, uv, y, NULL, NULL) != HOC_OK) {
     hoc_error_clear();
     return 0;
@@ -301,19 +335,43 @@ hoc_status hoc_cad_curve_eval(const hoc_model *m, int curve, size_t n, const dou
   return st;
 }
 
-hoc_status hoc_cad_curve_to_face(const hoc_model *m, int curve, int face, size_t n,
-                                 const double *t, double *uv) {
+/* hoc_cad_curve_to_face; kernel: the kernel's curve on the face even on a
+ * plane. */
+static hoc_status curve_to_face(const hoc_model *m, int curve, int face, size_t n,
+                                const double *t, double *uv, int kernel) {
   HOC_CHECK(curve >= 0 && curve < m->n_curves && face >= 0 && face < m->n_faces,
             HOC_ERR_ARGUMENT, "entity index out of range");
   const hoc_cad_curve *c = &m->curves[curve];
+  const hoc_cad_face *f = &m->faces[face];
   if (!n) return HOC_OK;
   double stack[STACK_POINTS];
   double *w = n <= STACK_POINTS ? stack : hoc_calloc(n, sizeof *w);
   HOC_CHECK(w, HOC_ERR_MEMORY, "out of memory for %zu curve parameters", n);
   for (size_t i = 0; i < n; ++i) w[i] = wrap1(t[i], c->lo, c->period);
-  hoc_status st = m->ops->curve_to_face(m->ctx, c, &m->faces[face], n, w, uv);
+  hoc_status st;
+  if (f->plane && !kernel) {
+    /* the feet of the curve's points: the Gram system of the frame */
+    double *x = hoc_calloc(3 * n, sizeof *x);
+    st = x ? m->ops->curve_eval(m->ctx, c, n, w, x, NULL)
+           : HOC_ERROR(HOC_ERR_MEMORY, "out of memory for %zu curve points", n);
+    for (size_t i = 0; i < n && st == HOC_OK; ++i) {
+      double r[3];
+      for (int d = 0; d < 3; ++d) r[d] = x[3 * i + d] - f->plane_o[d];
+      double ra = hoc_dot3(r, f->plane_a), rb = hoc_dot3(r, f->plane_b);
+      uv[2 * i] = f->plane_g[0] * ra + f->plane_g[1] * rb;
+      uv[2 * i + 1] = f->plane_g[1] * ra + f->plane_g[2] * rb;
+    }
+    free(x);
+  } else {
+    st = m->ops->curve_to_face(m->ctx, c, f, n, w, uv);
+  }
   if (w != stack) free(w);
   return st;
+}
+
+hoc_status hoc_cad_curve_to_face(const hoc_model *m, int curve, int face, size_t n,
+                                 const double *t, double *uv) {
+  return curve_to_face(m, curve, face, n, t, uv, 0);
 }
 
 hoc_status hoc_cad_vertex_to_face(const hoc_model *m, int vertex, int face, double *uv) {

@@ -26,6 +26,11 @@ typedef struct hoc_cad_face {
   double bbox[6];
   int *curves, n_curves; /* boundary curve tags, signed by orientation (for files) */
   unsigned char concurrent; /* backend evaluates this face from several threads at once */
+  /* a plane: phi(u, v) = plane_o + u plane_a + v plane_b (hoc_cad_finish
+   * checks it), plane_g the inverse of the Gram matrix of a and b (g00,
+   * g01, g11); a curve's parameters on it are those of its points' feet */
+  unsigned char plane;
+  double plane_o[3], plane_a[3], plane_b[3], plane_g[3];
 } hoc_cad_face;
 
 typedef struct hoc_cad_curve {
@@ -113,13 +118,17 @@ hoc_status hoc_cad_face_eval(const hoc_model *model, int face, size_t n, const d
 /** Curve evaluation; t outside [lo, hi] is wrapped on closed curves. */
 hoc_status hoc_cad_curve_eval(const hoc_model *model, int curve, size_t n, const double *t,
                               double *xyz, double *dt);
+/** The parameters on face `face` of curve `curve`'s points at t[n] (uv[n][2]):
+ *  the kernel's curve on that face, or on a plane the feet of the points
+ *  (closed form; the kernel projects the curve onto the plane anew at each
+ *  call where the model stores no curve on it). */
 hoc_status hoc_cad_curve_to_face(const hoc_model *model, int curve, int face, size_t n,
                                  const double *t, double *uv);
 hoc_status hoc_cad_vertex_to_face(const hoc_model *model, int vertex, int face, double *uv);
 
 /** The model's tolerance: the largest distance measured between a curve
  *  and a face it bounds, c(t) against phi_f(pcurve_f(t)) (the kernel's
- *  curve on that face, hoc_cad_curve_to_face), at 33 Chebyshev points of
+ *  curve on that face, also on a plane), at 33 Chebyshev points of
  *  each curve (closer together at its ends), and between each vertex and
  *  the ends of its curves and its place on the faces around it. STEP and
  *  IGES models agree only to such a tolerance (OpenCASCADE keeps one per
