@@ -579,23 +579,25 @@ hoc_status hoc_mesh_take_feet(hoc_mesh *m, const hoc_mesh *feet, const unsigned 
                 m->n_elems == feet->n_elems && m->n_slots == feet->n_slots,
             HOC_ERR_MISMATCH, "the two raises are not of one source");
   unsigned char *curve = hoc_calloc((size_t)m->model->n_curves + 1, 1);
-  HOC_CHECK(curve, HOC_ERR_MEMORY, "out of memory");
+  unsigned char *from = hoc_calloc(m->n_nodes + 1, 1);
+  if (!curve || !from) {
+    free(curve);
+    free(from);
+    return HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
+  }
   hoc_mesh_feet_curves(m, take, curve);
   for (size_t i = 0; i < m->n_nodes; ++i) {
-    int from_feet = m->dim[i] == HOC_ON_FACE    ? take[m->entity[i]]
-                    : m->dim[i] == HOC_ON_CURVE ? curve[m->entity[i]]
-                                                : 0;
-    if (!from_feet) continue;
+    from[i] = m->dim[i] == HOC_ON_FACE    ? take[m->entity[i]]
+              : m->dim[i] == HOC_ON_CURVE ? curve[m->entity[i]]
+                                          : 0;
+    if (!from[i]) continue;
     memcpy(m->xyz + 3 * i, feet->xyz + 3 * i, 3 * sizeof *m->xyz);
     memcpy(m->param + 2 * i, feet->param + 2 * i, 2 * sizeof *m->param);
   }
-  for (size_t sl = 0; sl < m->n_slots; ++sl) {
-    size_t i = m->slot_node[sl];
-    int from_feet = m->dim[i] == HOC_ON_FACE    ? take[m->entity[i]]
-                    : m->dim[i] == HOC_ON_CURVE ? curve[m->entity[i]]
-                                                : 0;
-    if (from_feet) memcpy(m->slot_uv + 2 * sl, feet->slot_uv + 2 * sl, 2 * sizeof *m->slot_uv);
-  }
+  for (size_t sl = 0; sl < m->n_slots; ++sl)
+    if (from[m->slot_node[sl]])
+      memcpy(m->slot_uv + 2 * sl, feet->slot_uv + 2 * sl, 2 * sizeof *m->slot_uv);
+  free(from);
   free(curve);
   hoc_mesh_element_params(m);
   hoc_mesh_per_element_pole_params(m);
