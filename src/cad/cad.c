@@ -350,8 +350,10 @@ static hoc_status curve_to_face(const hoc_model *m, int curve, int face, size_t 
   for (size_t i = 0; i < n; ++i) w[i] = wrap1(t[i], c->lo, c->period);
   hoc_status st;
   if (f->plane && !kernel) {
-    /* the feet of the curve's points: the Gram system of the frame */
-    double *x = hoc_calloc(3 * n, sizeof *x);
+    /* the feet of the curve's points: the Gram system of the frame (one
+     * point a call in the optimiser: no allocation then) */
+    double xs[3 * STACK_POINTS];
+    double *x = n <= STACK_POINTS ? xs : hoc_calloc(3 * n, sizeof *x);
     st = x ? m->ops->curve_eval(m->ctx, c, n, w, x, NULL)
            : HOC_ERROR(HOC_ERR_MEMORY, "out of memory for %zu curve points", n);
     for (size_t i = 0; i < n && st == HOC_OK; ++i) {
@@ -361,7 +363,7 @@ static hoc_status curve_to_face(const hoc_model *m, int curve, int face, size_t 
       uv[2 * i] = f->plane_g[0] * ra + f->plane_g[1] * rb;
       uv[2 * i + 1] = f->plane_g[1] * ra + f->plane_g[2] * rb;
     }
-    free(x);
+    if (x != xs) free(x);
   } else {
     st = m->ops->curve_to_face(m->ctx, c, f, n, w, uv);
   }

@@ -454,7 +454,7 @@ static hoc_status reinterpolate(const hoc_mesh *in, int p, hoc_nodeset set,
      * afresh below if one lands on a pole side */
     int at_pole = 0;
     HOC_TRY_GOTO(hoc_mesh_copy(straight, out), done);
-    for (size_t i = 0; i < b.n && i < foot.cap; ++i)
+    for (size_t i = 0; i < b.n; ++i)
       if (foot.want[i]) memcpy((*out)->param + 2 * i, b.par + 2 * i, 2 * sizeof *b.par);
     status = hoc_mesh_move_nodes(*out, foot.want, &at_pole);
     if (status != HOC_OK || !at_pole) {

@@ -57,6 +57,12 @@ static hoc_status measure_elements(const hoc_mesh *mesh, const hoc_quality_table
   return status;
 }
 
+static hoc_status check_measure(hoc_measure measure) {
+  HOC_CHECK(measure == HOC_MEASURE_SHAPE || measure == HOC_MEASURE_ODDY, HOC_ERR_ARGUMENT,
+            "unknown distortion measure %d", (int)measure);
+  return HOC_OK;
+}
+
 static double now(void) {
   struct timespec ts;
   clock_gettime(CLOCK_MONOTONIC, &ts);
@@ -74,8 +80,7 @@ hoc_status hoc_mesh_measure_tables(const hoc_mesh *mesh, const hoc_quality_table
 hoc_status hoc_mesh_measure_some(const hoc_mesh *mesh, hoc_measure measure,
                                  const unsigned char *elements, double *q) {
   HOC_CHECK(mesh && elements && q, HOC_ERR_ARGUMENT, "NULL argument");
-  HOC_CHECK(measure == HOC_MEASURE_SHAPE || measure == HOC_MEASURE_ODDY, HOC_ERR_ARGUMENT,
-            "unknown distortion measure %d", (int)measure);
+  HOC_TRY(check_measure(measure));
   const hoc_quality_tables *t;
   HOC_TRY(hoc_quality_tables_get(mesh->order, mesh->nodeset, &t));
   return measure_elements(mesh, t, measure, elements, q);
@@ -105,8 +110,7 @@ void hoc_quality_stats_from(const double *q, size_t ne, int order, hoc_quality_s
 hoc_status hoc_mesh_measure(const hoc_mesh *mesh, hoc_measure measure, double *quality,
                             unsigned char *tangled, hoc_quality_stats *stats) {
   HOC_CHECK(mesh, HOC_ERR_ARGUMENT, "no mesh given");
-  HOC_CHECK(measure == HOC_MEASURE_SHAPE || measure == HOC_MEASURE_ODDY, HOC_ERR_ARGUMENT,
-            "unknown distortion measure %d", (int)measure);
+  HOC_TRY(check_measure(measure));
   double t0 = now();
   const hoc_quality_tables *t;
   HOC_TRY(hoc_quality_tables_get(mesh->order, mesh->nodeset, &t));
