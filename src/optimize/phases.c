@@ -94,8 +94,10 @@ typedef struct run {
   int cut;                   /* this attempt was ended before its sweeps ran out */
   int smoothing;             /* the smoothing phase has begun */
   int second;                /* the sweeps are a second attempt's */
+  int settled;               /* an earlier phase's smoothing converged */
   /* free part of f and smallest q of the last sweeps, at [sweep % size] */
   double hist_f[HOC_OPT_STAGNATION_SWEEPS + 1], hist_q[HOC_OPT_STAGNATION_SWEEPS + 1];
+  int hist_it[HOC_OPT_STAGNATION_SWEEPS + 1]; /* the sweep each was recorded at */
 } run;
 
 /* The sweeps of a new attempt, after sweep r->it: up to `sweeps` of them. */
@@ -244,14 +246,19 @@ static hoc_status after_sweep(run *r, size_t tangled_before) {
  * (tunables.h). Compared with a tangled sweep, f is regularised and q is
  * 0: no measure of progress, so only untangled sweeps count. */
 static int stagnated(run *r) {
-  int size = HOC_OPT_STAGNATION_SWEEPS + 1, now = r->it % size,
-      then = (r->it - HOC_OPT_STAGNATION_SWEEPS) % size;
+  int size = HOC_OPT_STAGNATION_SWEEPS + 1, now = r->it % size;
   r->hist_f[now] = free_objective(&r->ctx, r->f);
   r->hist_q[now] = r->qmin;
+  r->hist_it[now] = r->it;
   if (r->tangled) r->since = r->it;
-  return r->tangled == 0 && r->it - r->since > HOC_OPT_STAGNATION_SWEEPS &&
-         r->hist_f[then] - r->hist_f[now] < HOC_OPT_STAGNATION_F * r->hist_f[then] &&
-         r->qmin - r->hist_q[then] < HOC_OPT_STAGNATION_Q;
+  /* after an earlier phase stagnated, a shorter window, its bounds scaled
+   * (HOC_OPT_SETTLED_SWEEPS) */
+  int window = r->settled ? r->rules.settled_sweeps : HOC_OPT_STAGNATION_SWEEPS,
+      then = (r->it - window) % size;
+  double share = (double)window / HOC_OPT_STAGNATION_SWEEPS;
+  return r->tangled == 0 && r->it - r->since > window && r->hist_it[then] == r->it - window &&
+         r->hist_f[then] - r->hist_f[now] < share * HOC_OPT_STAGNATION_F * r->hist_f[then] &&
+         r->qmin - r->hist_q[then] < share * HOC_OPT_STAGNATION_Q;
 }
 
 /* The sweeps of a sweeping phase until they end: *used_up when the
@@ -280,7 +287,7 @@ static hoc_status run_sweeps(run *r, int *used_up) {
     size_t active = 0;
     for (size_t i = 0; i < r->mesh->n_nodes; ++i) active += o->node.active[i];
     if (!active || !moved) {
-      r->res.converged = r->tangled == 0;
+      r->res.converged = r->settled = r->tangled == 0;
       if (r->tangled && !o->cfg.relax_uv && !o->adj.touched) {
         r->last = r->it; /* used up: the second attempt */
         r->cut = 1;
@@ -289,7 +296,7 @@ static hoc_status run_sweeps(run *r, int *used_up) {
       return HOC_OK;
     }
     if (stagnated(r)) {
-      r->res.converged = 1;
+      r->res.converged = r->settled = 1;
       return HOC_OK;
     }
   }
@@ -399,6 +406,7 @@ void hoc_opt_rules_default(hoc_opt_rules *rules) {
   rules->wake_near_min_order = HOC_OPT_WAKE_NEAR_MIN_ORDER;
   rules->exact_relax_uv_min_order = HOC_OPT_EXACT_RELAX_UV_MIN_ORDER;
   rules->frame_pool_bytes = HOC_OPT_FRAME_POOL_BYTES;
+  rules->settled_sweeps = HOC_OPT_SETTLED_SWEEPS;
 }
 
 /* One run of the optimiser from the mesh as it is (see hoc_mesh_optimize);

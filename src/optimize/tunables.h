@@ -47,6 +47,15 @@
 #define HOC_OPT_STAGNATION_F 0.05
 #define HOC_OPT_STAGNATION_Q 0.005
 
+/* Once a phase's smoothing stagnated, a later phase of the same run (the
+ * exact phase, the smoothing after a polish) repairs a few folds in a mesh
+ * smoothed already: it stagnates over a window of SETTLED_SWEEPS untangled
+ * sweeps, its bounds STAGNATION_F and STAGNATION_Q scaled by
+ * SETTLED_SWEEPS / STAGNATION_SWEEPS (the same rate). Ten sweeps there
+ * smooth the whole mesh once more for about 1 % of f (impeller_laufrad at
+ * order 3: 10 of its 37 sweeps). Test: tests/test_optimize_settled.c. */
+#define HOC_OPT_SETTLED_SWEEPS 1
+
 /* Sleeping and waking --------------------------------------------------- */
 
 /* Nodes of elements with q below this share of the mean q never sleep:
