@@ -94,7 +94,8 @@ typedef struct run {
   int cut;                   /* this attempt was ended before its sweeps ran out */
   int smoothing;             /* the smoothing phase has begun */
   int second;                /* the sweeps are a second attempt's */
-  int settled;               /* an earlier phase's smoothing converged */
+  int settled;               /* the last phase that ended for lack of progress left none
+                                tangled (its smoothing converged) */
   /* free part of f and smallest q of the last sweeps, at [sweep % size] */
   double hist_f[HOC_OPT_STAGNATION_SWEEPS + 1], hist_q[HOC_OPT_STAGNATION_SWEEPS + 1];
   int hist_it[HOC_OPT_STAGNATION_SWEEPS + 1]; /* the sweep each was recorded at */
@@ -251,7 +252,7 @@ static int stagnated(run *r) {
   r->hist_q[now] = r->qmin;
   r->hist_it[now] = r->it;
   if (r->tangled) r->since = r->it;
-  /* after an earlier phase stagnated, a shorter window, its bounds scaled
+  /* after a phase converged, a shorter window, its bounds scaled
    * (HOC_OPT_SETTLED_SWEEPS) */
   int window = r->settled ? r->rules.settled_sweeps : HOC_OPT_STAGNATION_SWEEPS,
       then = (r->it - window) % size;

@@ -47,7 +47,8 @@
 #define HOC_OPT_STAGNATION_F 0.05
 #define HOC_OPT_STAGNATION_Q 0.005
 
-/* Once a phase's smoothing stagnated, a later phase of the same run (the
+/* Once a phase's smoothing converged (it stagnated, or nothing moved any
+ * more, with no element tangled), a later phase of the same run (the
  * exact phase, the smoothing after a polish) repairs a few folds in a mesh
  * smoothed already: it stagnates over a window of SETTLED_SWEEPS untangled
  * sweeps, its bounds STAGNATION_F and STAGNATION_Q scaled by
