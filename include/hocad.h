@@ -419,7 +419,10 @@ typedef struct hoc_optimize_options {
                              nodes) goes to sleep; the optimisation ends when every node
                              sleeps, or when the last ten sweeps, all without a tangled
                              element, lowered f by less than 5% and raised the smallest q
-                             by less than 0.005
+                             by less than 0.005; once a phase ended so, a later one (the
+                             exact phase after the samples') ends on two untangled
+                             sweeps in a row, the last lowering f by less than 0.5% and
+                             raising the smallest q by less than 0.0005
                              (0: 0.1) */
   hoc_optimize_progress_fn progress;
   void *progress_user;
