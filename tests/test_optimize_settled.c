@@ -37,21 +37,14 @@ static void run(const hoc_mesh *m0, int settled_sweeps, hoc_optimize_result *r, 
   rules.settled_sweeps = settled_sweeps;
   int limited;
   CHECK_OK(hoc_opt_run_rules(m, &o, &rules, 0, 0, hoc_opt_now(), r, &limited));
-  double *q = calloc(m->n_elems, sizeof *q);
-  CHECK(q != NULL);
-  if (q) {
-    CHECK_OK(hoc_mesh_measure(m, HOC_MEASURE_SHAPE, q, NULL, NULL));
-    *qmin = 1;
-    for (size_t e = 0; e < m->n_elems; ++e) {
-      *qmin = q[e] < *qmin ? q[e] : *qmin;
-      *qmean += q[e] / (double)m->n_elems;
-    }
-  }
+  hoc_quality_stats st = {0};
+  CHECK_OK(hoc_mesh_measure(m, HOC_MEASURE_SHAPE, NULL, NULL, &st));
+  *qmin = st.min;
+  *qmean = st.mean;
   printf("window %2d: exact phase from sweep %d, untangled after sweep %d, %d sweeps, "
          "%zu tangled, objective %.6g, min q %.4f, mean q %.4f, %.2f s\n",
          settled_sweeps, r->diagnostics.exact_phase, r->best_iteration, r->iterations,
          r->tangled_final, r->objective_final, *qmin, *qmean, r->seconds);
-  free(q);
   hoc_mesh_destroy(&m);
 }
 
