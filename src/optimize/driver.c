@@ -2,6 +2,7 @@
  * elements tangled; the snapshots of the mesh state both keep.
  * SPDX-License-Identifier: GPL-2.0-or-later
  */
+#include "optimize/optimize.h"
 #include "optimize/optimize_impl.h"
 #include "optimize/tunables.h"
 
@@ -105,6 +106,19 @@ hoc_status hoc_opt_snapshot_restore(const hoc_opt_snapshot *s, hoc_mesh *m) {
 
 hoc_status hoc_mesh_optimize(hoc_mesh *mesh, const hoc_optimize_options *options,
                              hoc_optimize_result *result) {
+  return hoc_mesh_optimize_rules(mesh, options, NULL, result);
+}
+
+hoc_status hoc_mesh_optimize_full(hoc_mesh *mesh, const hoc_optimize_options *options,
+                                  hoc_optimize_result *result) {
+  hoc_opt_rules rules;
+  hoc_opt_rules_default(&rules);
+  rules.settled_sweeps = HOC_OPT_STAGNATION_SWEEPS;
+  return hoc_mesh_optimize_rules(mesh, options, &rules, result);
+}
+
+hoc_status hoc_mesh_optimize_rules(hoc_mesh *mesh, const hoc_optimize_options *options,
+                                   const hoc_opt_rules *rules, hoc_optimize_result *result) {
   HOC_CHECK(mesh, HOC_ERR_ARGUMENT, "no mesh given");
   double t0 = hoc_opt_now();
   hoc_opt_snapshot start = {0}, first = {0};
@@ -113,7 +127,7 @@ hoc_status hoc_mesh_optimize(hoc_mesh *mesh, const hoc_optimize_options *options
   /* the start is kept only where a protected run may follow (below) */
   int may_protect = mesh->order <= HOC_OPT_PROTECT_MAX_ORDER && !(options && options->free_elements);
   hoc_status status = may_protect ? hoc_opt_snapshot_take(&start, mesh, 0, 0) : HOC_OK;
-  if (status == HOC_OK) status = hoc_opt_run(mesh, options, 0, 0, t0, &a, &limited);
+  if (status == HOC_OK) status = hoc_opt_run_rules(mesh, options, rules, 0, 0, t0, &a, &limited);
   /* Left tangled (not for want of sweeps): a protected run from the start,
    * in which the sampled phase's steps may not fold an element between
    * samples that the exact test finds valid, kept if it leaves fewer
@@ -127,7 +141,8 @@ hoc_status hoc_mesh_optimize(hoc_mesh *mesh, const hoc_optimize_options *options
   if (status == HOC_OK && a.tangled_final && !limited && may_protect) {
     status = hoc_opt_snapshot_take(&first, mesh, a.tangled_final, a.objective_final);
     if (status == HOC_OK) status = hoc_opt_snapshot_restore(&start, mesh);
-    if (status == HOC_OK) status = hoc_opt_run(mesh, options, 1, a.iterations, t0, &b, &limited_b);
+    if (status == HOC_OK) status =
+        hoc_opt_run_rules(mesh, options, rules, 1, a.iterations, t0, &b, &limited_b);
     if (status == HOC_OK && b.tangled_final < a.tangled_final) {
       b.diagnostics.protected_run = a.iterations + 1;
       b.tangled_initial = a.tangled_initial;

@@ -302,8 +302,9 @@ static hoc_status linear_mesh(const hoc_run *run, hoc_model *model, hoc_linear_o
 
 /* The start of a high order's optimisation from the optimised coarse
  * order (HOC_PIPELINE_COARSE_FROM): *ho (the direct raise, measured)
- * becomes lin raised to the coarse order, optimised, and raised to the
- * order asked, unless that leaves elements tangled at the coarse order
+ * becomes lin raised to the coarse order, optimised (every phase to
+ * convergence: hoc_repair_optimize_start), and raised to the order asked,
+ * unless that leaves elements tangled at the coarse order
  * (then the direct raise, made again). */
 static hoc_status coarse_start(const hoc_run *run, hoc_stages *r, const hoc_mesh *lin,
                                hoc_mesh **ho) {
@@ -316,7 +317,7 @@ static hoc_status coarse_start(const hoc_run *run, hoc_stages *r, const hoc_mesh
   /* the direct raise is measured already: made again only if needed */
   hoc_mesh_destroy(ho);
   HOC_TRY_GOTO(hoc_pipeline_raise(run, lin, HOC_PIPELINE_COARSE_ORDER, &coarse, NULL), done);
-  HOC_TRY_GOTO(hoc_repair_optimize(run, r, "coarse", coarse, NULL), done);
+  HOC_TRY_GOTO(hoc_repair_optimize_start(run, r, "coarse", coarse), done);
   if (hoc_stages_last(r)->stage.stats.tangled) {
     HOC_TRY_GOTO(hoc_run_event(run, HOC_EVENT_NOTE,
                                "order %d left %zu element(s) tangled: order %d starts from the "

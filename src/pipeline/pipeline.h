@@ -176,6 +176,12 @@ hoc_status hoc_run_stage(const hoc_run *run, hoc_stages *r, const char *name, co
 hoc_status hoc_repair_optimize(const hoc_run *run, hoc_stages *r, const char *name, hoc_mesh *mesh,
                                const unsigned char *free);
 
+/* hoc_repair_optimize of the whole mesh for a mesh that is the start of a
+ * costlier optimisation (the coarse order): every phase of it converges
+ * by the first phase's rule (hoc_mesh_optimize_full). */
+hoc_status hoc_repair_optimize_start(const hoc_run *run, hoc_stages *r, const char *name,
+                                     hoc_mesh *mesh);
+
 /* The optimiser from the input's high-order nodes or from nodes re-placed
  * from its corners (hoc_mesh_repair); *mesh becomes the result, *start (if
  * start is not NULL) the mesh it was optimised from. */

@@ -5,6 +5,7 @@
  * starts of hoc_mesh_repair.
  * SPDX-License-Identifier: GPL-2.0-or-later */
 #include "mesh/mesh.h"
+#include "optimize/optimize.h"
 #include "pipeline/pipeline.h"
 
 #include <stdio.h>
@@ -24,8 +25,9 @@ static int iteration_event(void *user, const hoc_optimize_iteration *it) {
   return run->o.event(run->o.event_user, &ev);
 }
 
-hoc_status hoc_repair_optimize(const hoc_run *run, hoc_stages *r, const char *name, hoc_mesh *mesh,
-                               const unsigned char *free) {
+/* hoc_repair_optimize; full: hoc_mesh_optimize_full. */
+static hoc_status optimize_stage(const hoc_run *run, hoc_stages *r, const char *name, hoc_mesh *mesh,
+                                 const unsigned char *free, int full) {
   const hoc_mesh_options *o = &run->o;
   if (o->check_gradient) {
     double err;
@@ -51,12 +53,22 @@ hoc_status hoc_repair_optimize(const hoc_run *run, hoc_stages *r, const char *na
                         hoc_mesh_num_elements(mesh)));
   hoc_optimize_result res;
   double t0 = hoc_pipeline_now();
-  HOC_TRY(hoc_mesh_optimize(mesh, &oo, &res));
+  HOC_TRY(full ? hoc_mesh_optimize_full(mesh, &oo, &res) : hoc_mesh_optimize(mesh, &oo, &res));
   if (res.diagnostics.polished)
     HOC_TRY(hoc_run_event(run, HOC_EVENT_NOTE,
                           "the final polish untangled %zu element(s) the sweeps left",
                           res.diagnostics.polished));
   return hoc_run_stage(run, r, name, mesh, hoc_pipeline_now() - t0, NULL, &res);
+}
+
+hoc_status hoc_repair_optimize(const hoc_run *run, hoc_stages *r, const char *name, hoc_mesh *mesh,
+                               const unsigned char *free) {
+  return optimize_stage(run, r, name, mesh, free, 0);
+}
+
+hoc_status hoc_repair_optimize_start(const hoc_run *run, hoc_stages *r, const char *name,
+                                     hoc_mesh *mesh) {
+  return optimize_stage(run, r, name, mesh, NULL, 1);
 }
 
 /* The CAD tags of the faces holding flagged elements, each once, in element

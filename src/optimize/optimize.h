@@ -1,0 +1,17 @@
+/* What the pipeline uses of the optimiser beyond hocad.h.
+ * SPDX-License-Identifier: GPL-2.0-or-later */
+#ifndef HOC_OPTIMIZE_H
+#define HOC_OPTIMIZE_H
+
+#include "hocad.h"
+
+/* hoc_mesh_optimize with every phase ending by the first phase's
+ * stagnation rule (HOC_OPT_STAGNATION_SWEEPS; tunables.h), the shorter
+ * window of a phase after a converged one (HOC_OPT_SETTLED_SWEEPS) off:
+ * for a mesh that is the start of a costlier optimisation (the pipeline's
+ * coarse order, raised to a high order), where the settled rule's earlier
+ * end saves little and changes where that optimisation starts. */
+hoc_status hoc_mesh_optimize_full(hoc_mesh *mesh, const hoc_optimize_options *options,
+                                  hoc_optimize_result *result);
+
+#endif
