@@ -12,19 +12,10 @@
  * depends on the direction from which the point is approached, and the
  * slot's one normal, taken just inside the face towards its middle, is
  * not the limit along every element around the point. */
+#include "core/geometry.h"
 #include "mesh/mesh.h"
 
 #include <math.h>
-
-static void cross(const double *a, const double *b, double *c) {
-  c[0] = a[1] * b[2] - a[2] * b[1];
-  c[1] = a[2] * b[0] - a[0] * b[2];
-  c[2] = a[0] * b[1] - a[1] * b[0];
-}
-
-static double dot(const double *a, const double *b) {
-  return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
 
 /* Fraction of the way from a singular corner to the element's centroid
  * (in the face's parameters) at which its normal is taken: close enough
@@ -40,15 +31,15 @@ static hoc_status corner_normal(const hoc_mesh *m, size_t e, int k, double *n) {
   const double *uv = m->elem_uv + 6 * e;
   double du[3], dv[3];
   HOC_TRY(hoc_cad_face_eval(m->model, f, 1, uv + 2 * k, NULL, du, dv));
-  cross(du, dv, n);
-  if (!(sqrt(dot(n, n)) > 1e-10 * (dot(du, du) + dot(dv, dv)))) {
+  hoc_cross3(du, dv, n);
+  if (!(sqrt(hoc_dot3(n, n)) > 1e-10 * (hoc_dot3(du, du) + hoc_dot3(dv, dv)))) {
     double p[2];
     for (int d = 0; d < 2; ++d) {
       double centroid = (uv[d] + uv[2 + d] + uv[4 + d]) / 3;
       p[d] = uv[2 * k + d] + ALONG_ELEMENT * (centroid - uv[2 * k + d]);
     }
     HOC_TRY(hoc_cad_face_eval(m->model, f, 1, p, NULL, du, dv));
-    cross(du, dv, n);
+    hoc_cross3(du, dv, n);
   }
   double sign = m->face_orient[f] < 0 ? -1.0 : 1.0;
   for (int d = 0; d < 3; ++d)
@@ -86,18 +77,18 @@ hoc_status hoc_mesh_element_folds(const hoc_mesh *mesh, size_t e, int *folds) {
       centroid[d] = (c[d] + c[2 + d] + c[4 + d]) / 3;
     double dd[6], m[3];
     HOC_TRY(hoc_cad_face_eval(mesh->model, f, 1, p, NULL, dd, dd + 3));
-    cross(dd, dd + 3, m);
-    if (sqrt(dot(m, m)) > 1e-10 * (dot(dd, dd) + dot(dd + 3, dd + 3))) continue;
+    hoc_cross3(dd, dd + 3, m);
+    if (sqrt(hoc_dot3(m, m)) > 1e-10 * (hoc_dot3(dd, dd) + hoc_dot3(dd + 3, dd + 3))) continue;
     for (int d = 0; d < 2; ++d)
       p[d] += ALONG_ELEMENT * (centroid[d] - p[d]);
   }
   HOC_TRY(hoc_cad_face_eval(mesh->model, f, POINTS, uv, NULL, du, dv));
   for (k = 0; k < POINTS; ++k) {
-    cross(du + 3 * k, dv + 3 * k, n + 3 * k);
+    hoc_cross3(du + 3 * k, dv + 3 * k, n + 3 * k);
     /* where phi_u x phi_v vanishes (a pole, a collapsed side) its sign
      * is rounding: no sample */
-    regular[k] = sqrt(dot(n + 3 * k, n + 3 * k)) >
-                 1e-10 * (dot(du + 3 * k, du + 3 * k) + dot(dv + 3 * k, dv + 3 * k));
+    regular[k] = sqrt(hoc_dot3(n + 3 * k, n + 3 * k)) >
+                 1e-10 * (hoc_dot3(du + 3 * k, du + 3 * k) + hoc_dot3(dv + 3 * k, dv + 3 * k));
   }
   *folds = 0;
   for (int i = 0; i <= N && !*folds; ++i)
@@ -106,7 +97,7 @@ hoc_status hoc_mesh_element_folds(const hoc_mesh *mesh, size_t e, int *folds) {
       int p = at[i][j], q[3] = {i + j < N ? at[i + 1][j] : -1, i + j < N ? at[i][j + 1] : -1,
                                 j > 0 ? at[i + 1][j - 1] : -1};
       for (int m = 0; m < 3 && !*folds; ++m)
-        *folds = q[m] >= 0 && regular[p] && regular[q[m]] && dot(n + 3 * p, n + 3 * q[m]) < 0;
+        *folds = q[m] >= 0 && regular[p] && regular[q[m]] && hoc_dot3(n + 3 * p, n + 3 * q[m]) < 0;
     }
   return HOC_OK;
 }
@@ -127,12 +118,12 @@ hoc_status hoc_mesh_inverted_kinds(const hoc_mesh *mesh, const unsigned char *ta
       a[d] = x1[d] - x0[d];
       b[d] = x2[d] - x0[d];
     }
-    cross(a, b, t);
+    hoc_cross3(a, b, t);
     int valid = 1;
     for (int k = 0; k < 3 && valid; ++k) {
       double n[3];
       HOC_TRY(corner_normal(mesh, e, k, n));
-      valid = dot(t, n) > 0;
+      valid = hoc_dot3(t, n) > 0;
     }
     int folds = 0;
     if (!valid) HOC_TRY(hoc_mesh_element_folds(mesh, e, &folds));

@@ -479,7 +479,8 @@ static hoc_status crash_error(int sig, const char *first_error, const char *doin
  * algorithms (NULL: gmsh's default everywhere); model and mesh checked by
  * the caller. */
 static hoc_status generate_once(hoc_model *model, const hoc_linear_options *options,
-                                const int *algorithm, hoc_mesh **mesh) {
+                                const int *algorithm, const hoc_linear_grading *grading,
+                                hoc_mesh **mesh) {
   hoc_linear_options o;
   hoc_linear_options_default(&o);
   if (options) o = *options;
@@ -498,6 +499,12 @@ static hoc_status generate_once(hoc_model *model, const hoc_linear_options *opti
             "mesh size %g is too small for a model of size %g (at most 10^6 edges across)", hmax,
             model->diagonal);
   double curv = o.curvature > 0 ? o.curvature : default_curvature(o.order);
+  if (grading) {
+    /* the first mesh's sizes carry the curvature's; the minimum under the
+     * shortest curve's length */
+    curv = 0;
+    hmin = fmin(hmin, 0.5 * hoc_linear_grading_min_size(grading));
+  }
 
   int ierr = 0;
   gmshModelMeshClear(NULL, 0, &ierr);
@@ -607,17 +614,14 @@ static double size_at(int dim, int tag, double x, double y, double z, void *data
   return h > 0 ? h : 1e22;
 }
 
-hoc_status hoc_mesh_generate_linear_with(hoc_model *model, const hoc_linear_options *options,
-                                         const int *algorithm, hoc_mesh **mesh) {
-  HOC_CHECK(mesh, HOC_ERR_ARGUMENT, "mesh output is NULL");
-  *mesh = NULL;
-  HOC_CHECK(model && model->is_gmsh, HOC_ERR_ARGUMENT,
-            "linear meshing needs a model opened from a CAD file");
+/* The mesh with the options' sizes (and face_size's bounds). */
+static hoc_status generate_sized(hoc_model *model, const hoc_linear_options *options,
+                                 const int *algorithm, hoc_mesh **mesh) {
   for (int f = 0; algorithm && f < model->n_faces; ++f)
     HOC_CHECK(algorithm[f] >= 0 && algorithm[f] <= HOC_GMSH_ALGORITHM_MAX, HOC_ERR_ARGUMENT,
               "meshing algorithm %d of face %d is not one of gmsh's (0..%d)", algorithm[f],
               model->faces[f].tag, HOC_GMSH_ALGORITHM_MAX);
-  if (!options || !options->face_size) return generate_once(model, options, algorithm, mesh);
+  if (!options || !options->face_size) return generate_once(model, options, algorithm, NULL, mesh);
   /* faces meshed finer: the bound on the face and on its boundary curves */
   sizing s = {0};
   for (int f = 0; f < model->n_faces; ++f) {
@@ -648,11 +652,95 @@ hoc_status hoc_mesh_generate_linear_with(hoc_model *model, const hoc_linear_opti
   int ierr = 0;
   gmshModelMeshSetSizeCallback(size_at, &s, &ierr);
   status = ierr ? HOC_ERROR(HOC_ERR_MESH, "gmsh refused the mesh size callback")
-                : generate_once(model, options, algorithm, mesh);
+                : generate_once(model, options, algorithm, NULL, mesh);
   gmshModelMeshRemoveSizeCallback(&ierr);
 done:
   free(s.face_size);
   free(s.curve_size);
+  return status;
+}
+
+static double graded_size(int dim, int tag, double x, double y, double z, void *data) {
+  (void)dim, (void)tag;
+  double p[3] = {x, y, z};
+  return hoc_linear_grading_size(data, p);
+}
+
+/* The inverted triangles of m and its smallest q away from poles (q is 0
+ * at a corner where phi_u x phi_v vanishes, in every mesh of the face). */
+static hoc_status linear_quality(const hoc_mesh *m, size_t *tangled, double *qmin) {
+  size_t ne = m->n_elems;
+  double *q = hoc_calloc(ne + 1, sizeof *q);
+  HOC_CHECK(q, HOC_ERR_MEMORY, "out of memory");
+  hoc_quality_stats st;
+  hoc_status status = hoc_mesh_measure(m, HOC_MEASURE_SHAPE, q, NULL, &st);
+  *tangled = st.tangled;
+  *qmin = INFINITY;
+  for (size_t e = 0; e < ne; ++e) {
+    int at_pole = 0;
+    for (size_t k = 0; k < 3; ++k)
+      at_pole |= m->slot_pole[m->elem_slot[3 * e + k]] != 0;
+    if (!at_pole && q[e] < *qmin) *qmin = q[e];
+  }
+  if (!isfinite(*qmin)) *qmin = st.min;
+  free(q);
+  return status;
+}
+
+/* Whether mesh a is the better linear mesh: fewer faces failed, then fewer
+ * inverted triangles, then a higher smallest q away from poles. */
+static hoc_status better(const hoc_mesh *a, const hoc_mesh *b, int *yes) {
+  size_t ta, tb;
+  double qa, qb;
+  HOC_TRY(linear_quality(a, &ta, &qa));
+  HOC_TRY(linear_quality(b, &tb, &qb));
+  if (a->n_failed_faces != b->n_failed_faces) *yes = a->n_failed_faces < b->n_failed_faces;
+  else if (ta != tb) *yes = ta < tb;
+  else *yes = qa > qb;
+  return HOC_OK;
+}
+
+hoc_status hoc_mesh_generate_linear_with(hoc_model *model, const hoc_linear_options *options,
+                                         const int *algorithm, hoc_mesh **mesh) {
+  HOC_CHECK(mesh, HOC_ERR_ARGUMENT, "mesh output is NULL");
+  *mesh = NULL;
+  HOC_CHECK(model && model->is_gmsh, HOC_ERR_ARGUMENT,
+            "linear meshing needs a model opened from a CAD file");
+  HOC_TRY(generate_sized(model, options, algorithm, mesh));
+  /* curves far shorter than the mesh around them: the mesh made again
+   * with sizes graded down to them (HOC_LINEAR_SHORT_RATIO) */
+  hoc_linear_grading *g = NULL;
+  hoc_mesh *graded = NULL;
+  hoc_linear_options o;
+  hoc_linear_options_default(&o);
+  if (options) o = *options;
+  double hmax, hmin;
+  hoc_linear_sizes(model, &o, &hmax, &hmin);
+  double ncurv = o.curvature > 0 ? o.curvature : default_curvature(o.order);
+  hoc_status status = hoc_linear_grading_make(*mesh, HOC_LINEAR_SHORT_RATIO, hmin, hmax, ncurv,
+                                              o.face_size, &g);
+  if (status != HOC_OK || !g) goto done;
+  int ierr = 0, keep = 0;
+  gmshModelMeshSetSizeCallback(graded_size, g, &ierr);
+  if (ierr) {
+    status = HOC_ERROR(HOC_ERR_MESH, "gmsh refused the mesh size callback");
+    goto done;
+  }
+  status = generate_once(model, options, algorithm, g, &graded);
+  gmshModelMeshRemoveSizeCallback(&ierr);
+  if (status == HOC_ERR_INTERRUPTED || status == HOC_ERR_MEMORY) goto done;
+  /* (a graded mesh gmsh fails on leaves the first) */
+  status = HOC_OK;
+  if (graded) HOC_TRY_GOTO(better(graded, *mesh, &keep), done);
+  if (keep) {
+    hoc_mesh_destroy(mesh);
+    *mesh = graded;
+    graded = NULL;
+  }
+done:
+  hoc_linear_grading_free(&g);
+  hoc_mesh_destroy(&graded);
+  if (status != HOC_OK) hoc_mesh_destroy(mesh);
   return status;
 }
 

@@ -1,0 +1,407 @@
+/* Sizes graded down to CAD curves far shorter than the mesh around them:
+ * the size field of a second linear meshing (hoc_linear_grading_*).
+ *
+ * A CAD curve much shorter than the edges around it (a blunt trailing
+ * edge's end, a sliver face's short side, a small edge a fillet leaves)
+ * gets one segment, and the triangles on it have that segment as one side
+ * and the surrounding size as the two others: slivers of q about
+ * sqrt(3) L / h. gmsh's curvature sizing does not grade toward it, and
+ * gmsh 4.8 clamps every size, its size callback's too, to its minimum
+ * size (a tenth of the maximum by default), so no size field alone can.
+ * The second meshing lowers the minimum and turns gmsh's curvature sizing
+ * off (below the old minimum it would refine every tight radius); this
+ * field gives both back: at each node of the first mesh the size gmsh's
+ * sizing asked for there (2 pi / (n kappa) within [hmin, hmax], kappa the
+ * largest curvature of the node's faces and curves, by differences of the
+ * CAD's derivatives; at most the bound of a face meshed finer), linear in the first mesh's triangle at the point
+ * (found from the nearest node), and within reach of a short curve
+ * HOC_LINEAR_SHORT_SIZE x its length growing by HOC_LINEAR_GRADE per unit
+ * of distance from it (mesh.h).
+ * SPDX-License-Identifier: GPL-2.0-or-later */
+#include "cad/cad.h"
+#include "core/geometry.h"
+#include "core/hash.h"
+#include "mesh/mesh.h"
+
+#include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+struct hoc_linear_grading {
+  /* the first mesh's nodes, sorted by grid cell, and their sizes */
+  size_t n;
+  double *xyz, *h;
+  double origin[3], cell;
+  hoc_hash cells; /* cell key -> first node of the cell in the sorted order */
+  size_t *end;    /* [n]: one past the last node of the cell of node i (at its first) */
+  /* its triangles (sorted node indices) and each node's, CSR */
+  size_t *tri, *adj_start, *adj;
+  /* the short curves' segments [n_seg][6] and their lengths */
+  size_t n_seg;
+  double *seg, *seg_h;
+  double min_size;
+};
+
+static double dist2(const double *a, const double *b) {
+  double d0 = a[0] - b[0], d1 = a[1] - b[1], d2 = a[2] - b[2];
+  return d0 * d0 + d1 * d1 + d2 * d2;
+}
+
+/* Distance from x to the segment a-b. */
+static double seg_dist(const double *x, const double *a, const double *b) {
+  double ab[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, ax[3] = {x[0] - a[0], x[1] - a[1],
+                                                                   x[2] - a[2]};
+  double l2 = ab[0] * ab[0] + ab[1] * ab[1] + ab[2] * ab[2];
+  double t = l2 > 0 ? (ab[0] * ax[0] + ab[1] * ax[1] + ab[2] * ax[2]) / l2 : 0;
+  t = t < 0 ? 0 : t > 1 ? 1 : t;
+  double p[3] = {a[0] + t * ab[0], a[1] + t * ab[1], a[2] + t * ab[2]};
+  return sqrt(dist2(x, p));
+}
+
+#define CELL_BITS 21
+#define CELL_MAX ((1 << CELL_BITS) - 1)
+
+static int64_t cell_index(double x, double o, double c) {
+  double i = floor((x - o) / c);
+  return i < 0 ? 0 : i > CELL_MAX ? CELL_MAX : (int64_t)i;
+}
+
+static uint64_t cell_key(int64_t i, int64_t j, int64_t k) {
+  return ((uint64_t)i << (2 * CELL_BITS)) | ((uint64_t)j << CELL_BITS) | (uint64_t)k;
+}
+
+typedef struct keyed {
+  uint64_t key;
+  size_t node;
+} keyed;
+
+static int by_key(const void *a, const void *b) {
+  const keyed *x = a, *y = b;
+  if (x->key != y->key) return x->key < y->key ? -1 : 1;
+  return x->node < y->node ? -1 : x->node > y->node;
+}
+
+void hoc_linear_grading_free(hoc_linear_grading **g) {
+  if (!g || !*g) return;
+  free((*g)->xyz);
+  free((*g)->h);
+  free((*g)->end);
+  free((*g)->tri);
+  free((*g)->adj_start);
+  free((*g)->adj);
+  free((*g)->seg);
+  free((*g)->seg_h);
+  hoc_hash_free(&(*g)->cells);
+  free(*g);
+  *g = NULL;
+}
+
+/* The larger principal curvature (absolute) of face f at uv, by central
+ * differences of its first derivatives (one-sided at its bounds); -1
+ * where the face degenerates (a pole), 0 where it cannot be evaluated. */
+static double face_curvature(const hoc_model *model, int f, const double *uv) {
+  const hoc_cad_face *face = &model->faces[f];
+  double d[2], lo[2], hi[2];
+  for (int k = 0; k < 2; ++k) {
+    d[k] = 1e-4 * (face->hi[k] - face->lo[k]);
+    if (!(d[k] > 0)) return 0;
+    lo[k] = face->period[k] > 0 ? uv[k] - d[k] : fmax(face->lo[k], uv[k] - d[k]);
+    hi[k] = face->period[k] > 0 ? uv[k] + d[k] : fmin(face->hi[k], uv[k] + d[k]);
+    if (!(hi[k] > lo[k])) return 0;
+  }
+  double p[10] = {uv[0], uv[1], lo[0], uv[1], hi[0], uv[1], uv[0], lo[1], uv[0], hi[1]};
+  double du[15], dv[15];
+  if (hoc_cad_face_eval(model, f, 5, p, NULL, du, dv) != HOC_OK) return 0;
+  double n[3], uu[3], uv2[3], vv[3];
+  hoc_cross3(du, dv, n);
+  double area = sqrt(hoc_dot3(n, n));
+  if (!(area > 0)) return -1;
+  for (int k = 0; k < 3; ++k) {
+    n[k] /= area;
+    uu[k] = (du[6 + k] - du[3 + k]) / (hi[0] - lo[0]);
+    uv2[k] = (du[12 + k] - du[9 + k]) / (hi[1] - lo[1]);
+    vv[k] = (dv[12 + k] - dv[9 + k]) / (hi[1] - lo[1]);
+  }
+  double E = hoc_dot3(du, du), F = hoc_dot3(du, dv), G = hoc_dot3(dv, dv);
+  double L = hoc_dot3(n, uu), M = hoc_dot3(n, uv2), N = hoc_dot3(n, vv), det = E * G - F * F;
+  if (!(det > 0)) return -1;
+  double K = (L * N - M * M) / det, H = (E * N - 2 * F * M + G * L) / (2 * det);
+  return fabs(H) + sqrt(fmax(H * H - K, 0));
+}
+
+/* The curvature of curve c at t (central differences of its derivative). */
+static double curve_curvature(const hoc_model *model, int c, double t) {
+  const hoc_cad_curve *curve = &model->curves[c];
+  double d = 1e-4 * (curve->hi - curve->lo);
+  if (!(d > 0)) return 0;
+  double a = curve->period > 0 ? t - d : fmax(curve->lo, t - d);
+  double b = curve->period > 0 ? t + d : fmin(curve->hi, t + d);
+  if (!(b > a)) return 0;
+  double ts[3] = {t, a, b}, dt[9];
+  if (hoc_cad_curve_eval(model, c, 3, ts, NULL, dt) != HOC_OK) return 0;
+  double dd[3], x[3];
+  for (int k = 0; k < 3; ++k)
+    dd[k] = (dt[6 + k] - dt[3 + k]) / (b - a);
+  hoc_cross3(dt, dd, x);
+  double s = sqrt(hoc_dot3(dt, dt));
+  return s > 0 ? sqrt(hoc_dot3(x, x)) / (s * s * s) : 0;
+}
+
+/* Each node's size as gmsh's sizing gave it: the curvature's (2 pi / (n
+ * kappa), kappa the largest of its faces' and curves' there) within
+ * [hmin, hmax]; at a pole (no normal there) the first mesh's mean edge
+ * at the node; at most the bound of a face meshed finer (face_size). */
+static hoc_status node_sizes(const hoc_mesh *lin, double hmin, double hmax, double ncurv,
+                             const double *face_size, double *h) {
+  const hoc_model *model = lin->model;
+  size_t nn = lin->n_nodes;
+  hoc_status status = HOC_OK;
+  unsigned char *pole = NULL;
+  double *sum = NULL;
+  size_t *count = NULL;
+  HOC_ALLOC_GOTO(pole, nn + 1, done);
+  HOC_ALLOC_GOTO(sum, nn + 1, done);
+  HOC_ALLOC_GOTO(count, nn + 1, done);
+  for (size_t i = 0; i < nn; ++i)
+    h[i] = 0; /* kappa first */
+  for (size_t s = 0; s < lin->n_slots; ++s) {
+    double k = face_curvature(model, lin->slot_face[s], lin->slot_uv + 2 * s);
+    size_t n = lin->slot_node[s];
+    if (k < 0) pole[n] = 1;
+    else if (k > h[n]) h[n] = k;
+  }
+  for (size_t l = 0; l < lin->n_lines; ++l)
+    for (size_t e = 0; e < 2; ++e) {
+      double k = curve_curvature(model, lin->line_curve[l], lin->line_t[2 * l + e]);
+      size_t n = lin->line_conn[2 * l + e];
+      if (k > h[n]) h[n] = k;
+    }
+  for (size_t e = 0; e < lin->n_elems; ++e)
+    for (size_t k = 0; k < 3; ++k) {
+      size_t a = lin->conn[3 * e + k], b = lin->conn[3 * e + (k + 1) % 3];
+      double l = sqrt(dist2(lin->xyz + 3 * a, lin->xyz + 3 * b));
+      sum[a] += l, sum[b] += l;
+      count[a]++, count[b]++;
+    }
+  for (size_t i = 0; i < nn; ++i) {
+    double size = h[i] > 0 && ncurv > 0 ? 2 * 3.14159265358979323846 / (ncurv * h[i]) : hmax;
+    if (pole[i] && count[i]) size = sum[i] / (double)count[i];
+    h[i] = fmin(hmax, fmax(hmin, size));
+  }
+  for (size_t s = 0; face_size && s < lin->n_slots; ++s) {
+    double b = face_size[lin->slot_face[s]];
+    size_t n = lin->slot_node[s];
+    if (b > 0 && b < h[n]) h[n] = b;
+  }
+done:
+  free(pole);
+  free(sum);
+  free(count);
+  return status;
+}
+
+/* The curves of lin far shorter than the mesh around them: their
+ * segments into g (NULL g: only counted in *n). */
+static hoc_status short_curves(const hoc_mesh *lin, double ratio, hoc_linear_grading *g,
+                               size_t *n) {
+  const hoc_model *model = lin->model;
+  size_t nn = lin->n_nodes, nc = (size_t)model->n_curves;
+  hoc_status status = HOC_OK;
+  double *longest = NULL, *len = NULL, *around = NULL;
+  HOC_ALLOC_GOTO(longest, nn + 1, done);
+  HOC_ALLOC_GOTO(len, nc + 1, done);
+  HOC_ALLOC_GOTO(around, nc + 1, done);
+  for (size_t e = 0; e < lin->n_elems; ++e)
+    for (size_t k = 0; k < 3; ++k) {
+      size_t a = lin->conn[3 * e + k], b = lin->conn[3 * e + (k + 1) % 3];
+      double l = sqrt(dist2(lin->xyz + 3 * a, lin->xyz + 3 * b));
+      longest[a] = fmax(longest[a], l);
+      longest[b] = fmax(longest[b], l);
+    }
+  /* each curve's length, and the longest edge at its nodes */
+  for (size_t l = 0; l < lin->n_lines; ++l) {
+    int c = lin->line_curve[l];
+    size_t a = lin->line_conn[2 * l], b = lin->line_conn[2 * l + 1];
+    len[c] += sqrt(dist2(lin->xyz + 3 * a, lin->xyz + 3 * b));
+    around[c] = fmax(around[c], fmax(longest[a], longest[b]));
+  }
+  *n = 0;
+  for (size_t l = 0; l < lin->n_lines; ++l) {
+    int c = lin->line_curve[l];
+    if (!(len[c] > 0 && around[c] > ratio * len[c])) continue;
+    if (g) {
+      memcpy(g->seg + 6 * *n, lin->xyz + 3 * lin->line_conn[2 * l], 3 * sizeof *g->seg);
+      memcpy(g->seg + 6 * *n + 3, lin->xyz + 3 * lin->line_conn[2 * l + 1], 3 * sizeof *g->seg);
+      g->seg_h[*n] = len[c];
+      g->min_size = fmin(g->min_size, len[c]);
+    }
+    ++*n;
+  }
+done:
+  free(longest);
+  free(len);
+  free(around);
+  return status;
+}
+
+/* g's grid of lin's nodes (cells of the mean edge length) and its node
+ * sizes h (by lin's node index), sorted by cell. */
+static hoc_status node_grid(const hoc_mesh *lin, const double *h, hoc_linear_grading *g) {
+  const hoc_model *model = lin->model;
+  size_t nn = lin->n_nodes, ne = lin->n_elems;
+  hoc_status status = HOC_OK;
+  keyed *order = NULL;
+  size_t *rank = NULL, *fill = NULL;
+  double sum = 0;
+  for (size_t e = 0; e < ne; ++e)
+    for (size_t k = 0; k < 3; ++k)
+      sum += sqrt(dist2(lin->xyz + 3 * lin->conn[3 * e + k],
+                        lin->xyz + 3 * lin->conn[3 * e + (k + 1) % 3]));
+  g->cell = fmax(ne ? sum / (double)(3 * ne) : 0, 1e-9 * model->diagonal);
+  /* (at most 2^21 cells a side: coarser where the model is wider) */
+  for (int d = 0; d < 3; ++d) {
+    g->origin[d] = model->bbox[d];
+    double side = model->bbox[d + 3] - model->bbox[d];
+    if (side / g->cell > CELL_MAX / 2) g->cell = side / (CELL_MAX / 2);
+  }
+  g->n = nn;
+  HOC_ALLOC_GOTO(order, nn + 1, done);
+  for (size_t i = 0; i < nn; ++i) {
+    const double *x = lin->xyz + 3 * i;
+    order[i].key = cell_key(cell_index(x[0], g->origin[0], g->cell),
+                            cell_index(x[1], g->origin[1], g->cell),
+                            cell_index(x[2], g->origin[2], g->cell));
+    order[i].node = i;
+  }
+  qsort(order, nn, sizeof *order, by_key);
+  HOC_ALLOC_GOTO(g->xyz, 3 * nn + 1, done);
+  HOC_ALLOC_GOTO(g->h, nn + 1, done);
+  HOC_ALLOC_GOTO(g->end, nn + 1, done);
+  HOC_ALLOC_GOTO(rank, nn + 1, done);
+  for (size_t i = 0; i < nn; ++i) {
+    memcpy(g->xyz + 3 * i, lin->xyz + 3 * order[i].node, 3 * sizeof *g->xyz);
+    g->h[i] = h[order[i].node];
+    rank[order[i].node] = i;
+  }
+  /* the triangles on the sorted nodes, and each node's */
+  HOC_ALLOC_GOTO(g->tri, 3 * ne + 1, done);
+  HOC_ALLOC_GOTO(g->adj_start, nn + 2, done);
+  HOC_ALLOC_GOTO(g->adj, 3 * ne + 1, done);
+  HOC_ALLOC_GOTO(fill, nn + 1, done);
+  for (size_t i = 0; i < 3 * ne; ++i) {
+    g->tri[i] = rank[lin->conn[i]];
+    g->adj_start[g->tri[i] + 1]++;
+  }
+  for (size_t i = 0; i < nn; ++i)
+    g->adj_start[i + 1] += g->adj_start[i];
+  for (size_t i = 0; i < 3 * ne; ++i)
+    g->adj[g->adj_start[g->tri[i]] + fill[g->tri[i]]++] = i / 3;
+  HOC_TRY_GOTO(hoc_hash_init(&g->cells, nn / 4 + 16), done);
+  for (size_t i = 0, j; i < nn; i = j) {
+    for (j = i + 1; j < nn && order[j].key == order[i].key; ++j) {
+    }
+    g->end[i] = j;
+    HOC_TRY_GOTO(hoc_hash_insert(&g->cells, order[i].key, i, NULL, NULL), done);
+  }
+done:
+  free(order);
+  free(rank);
+  free(fill);
+  return status;
+}
+
+hoc_status hoc_linear_grading_make(const hoc_mesh *lin, double ratio, double hmin, double hmax,
+                                   double ncurv, const double *face_size,
+                                   hoc_linear_grading **out) {
+  *out = NULL;
+  hoc_status status = HOC_OK;
+  hoc_linear_grading *g = NULL;
+  double *h = NULL;
+  size_t n_seg;
+  HOC_TRY(short_curves(lin, ratio, NULL, &n_seg));
+  if (!n_seg) return HOC_OK; /* nothing to grade */
+  HOC_ALLOC_GOTO(g, 1, done);
+  HOC_ALLOC_GOTO(g->seg, 6 * n_seg, done);
+  HOC_ALLOC_GOTO(g->seg_h, n_seg, done);
+  g->min_size = INFINITY;
+  HOC_TRY_GOTO(short_curves(lin, ratio, g, &g->n_seg), done);
+  HOC_ALLOC_GOTO(h, lin->n_nodes + 1, done);
+  HOC_TRY_GOTO(node_sizes(lin, hmin, hmax, ncurv, face_size, h), done);
+  HOC_TRY_GOTO(node_grid(lin, h, g), done);
+  *out = g;
+  g = NULL;
+done:
+  hoc_linear_grading_free(&g);
+  free(h);
+  return status;
+}
+
+size_t hoc_linear_grading_segments(const hoc_linear_grading *g) { return g ? g->n_seg : 0; }
+
+double hoc_linear_grading_min_size(const hoc_linear_grading *g) { return g->min_size; }
+
+/* The first mesh's size at its node nearest to x (rings of cells around
+ * x's until no nearer node can be found). */
+static double background(const hoc_linear_grading *g, const double *x) {
+  int64_t c[3];
+  for (int d = 0; d < 3; ++d)
+    c[d] = cell_index(x[d], g->origin[d], g->cell);
+  double best = INFINITY, h = 0;
+  size_t near = 0;
+  for (int64_t r = 0; r <= CELL_MAX; ++r) {
+    /* every node in a ring r is at least (r - 1) cells away */
+    if (r > 0 && (double)(r - 1) * g->cell > sqrt(best)) break;
+    for (int64_t i = c[0] - r; i <= c[0] + r; ++i)
+      for (int64_t j = c[1] - r; j <= c[1] + r; ++j)
+        for (int64_t k = c[2] - r; k <= c[2] + r; ++k) {
+          if (i < 0 || j < 0 || k < 0 || i > CELL_MAX || j > CELL_MAX || k > CELL_MAX) continue;
+          /* only the ring's surface */
+          if (llabs(i - c[0]) != r && llabs(j - c[1]) != r && llabs(k - c[2]) != r) continue;
+          size_t first = hoc_hash_get(&g->cells, cell_key(i, j, k));
+          if (first == SIZE_MAX) continue;
+          for (size_t n = first; n < g->end[first]; ++n) {
+            double d2 = dist2(x, g->xyz + 3 * n);
+            if (d2 < best) best = d2, h = g->h[n], near = n;
+          }
+        }
+    if (r > 64 && isfinite(best)) break; /* (far from every node: the nearest found) */
+  }
+  /* linear in the triangle around that node that holds x's projection best */
+  double best_b = -INFINITY;
+  for (size_t a = g->adj_start[near]; a < g->adj_start[near + 1]; ++a) {
+    const size_t *t = g->tri + 3 * g->adj[a];
+    const double *p0 = g->xyz + 3 * t[0], *p1 = g->xyz + 3 * t[1], *p2 = g->xyz + 3 * t[2];
+    double e1[3], e2[3], w[3];
+    for (int d = 0; d < 3; ++d) {
+      e1[d] = p1[d] - p0[d];
+      e2[d] = p2[d] - p0[d];
+      w[d] = x[d] - p0[d];
+    }
+    double a11 = e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2];
+    double a12 = e1[0] * e2[0] + e1[1] * e2[1] + e1[2] * e2[2];
+    double a22 = e2[0] * e2[0] + e2[1] * e2[1] + e2[2] * e2[2];
+    double r1 = e1[0] * w[0] + e1[1] * w[1] + e1[2] * w[2];
+    double r2 = e2[0] * w[0] + e2[1] * w[1] + e2[2] * w[2];
+    double det = a11 * a22 - a12 * a12;
+    if (!(det > 0)) continue;
+    double b1 = (a22 * r1 - a12 * r2) / det, b2 = (a11 * r2 - a12 * r1) / det, b0 = 1 - b1 - b2;
+    double worst = fmin(b0, fmin(b1, b2));
+    if (worst <= best_b) continue;
+    best_b = worst;
+    b0 = fmax(b0, 0), b1 = fmax(b1, 0), b2 = fmax(b2, 0);
+    double sum = b0 + b1 + b2;
+    h = (b0 * g->h[t[0]] + b1 * g->h[t[1]] + b2 * g->h[t[2]]) / sum;
+  }
+  return h;
+}
+
+double hoc_linear_grading_size(const hoc_linear_grading *g, const double *x) {
+  double h = background(g, x);
+  for (size_t s = 0; s < g->n_seg; ++s) {
+    double graded = HOC_LINEAR_SHORT_SIZE * g->seg_h[s] +
+                    HOC_LINEAR_GRADE * seg_dist(x, g->seg + 6 * s, g->seg + 6 * s + 3);
+    if (graded < h) h = graded;
+  }
+  return h;
+}

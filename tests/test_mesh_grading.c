@@ -1,0 +1,71 @@
+/* The linear mesh graded down to CAD curves far shorter than the mesh
+ * around them (mesh/grading.c; HOC_LINEAR_SHORT_RATIO, _SHORT_SIZE and
+ * _GRADE in mesh.h). Its class: a short CAD curve gets one segment, and
+ * gmsh's triangles on it are slivers (q about sqrt(3) L / h), which high
+ * orders fold and no optimisation opens.
+ *
+ * The case: tests/data/plate_short_edge.brep, a 10 x 10 plate with a
+ * corner cut by a curve 0.00198 long, at hocad's default sizes (edges
+ * 0.707, gmsh's minimum 0.0707). Without the grading gmsh's triangle on
+ * that curve has q 0.0073 (sides 0.47, 0.47, 0.002); with it every
+ * triangle has q above 0.15, for a few more elements. The size field
+ * itself against its closed form: on the plane (no curvature) the largest
+ * size away from the short curve, HOC_LINEAR_SHORT_SIZE x its length plus
+ * HOC_LINEAR_GRADE x the distance near it.
+ * SPDX-License-Identifier: GPL-2.0-or-later */
+#include "mesh/mesh.h"
+#include "test_util.h"
+
+#include <math.h>
+#include <stdio.h>
+
+#define DATA HOC_SOURCE_DIR "/tests/data/"
+
+int main(void) {
+  hoc_model *model = NULL;
+  hoc_mesh *lin = NULL;
+  hoc_linear_grading *g = NULL;
+  CHECK_OK(hoc_model_open(DATA "plate_short_edge.brep", &model));
+  if (!model) return test_report();
+  hoc_linear_options lo;
+  hoc_linear_options_default(&lo);
+  lo.order = 3;
+  double hmax, hmin;
+  hoc_linear_sizes(model, &lo, &hmax, &hmin);
+  CHECK_OK(hoc_mesh_generate_linear(model, &lo, &lin));
+  if (!lin) goto out;
+  hoc_quality_stats st = {0};
+  CHECK_OK(hoc_mesh_measure(lin, HOC_MEASURE_SHAPE, NULL, NULL, &st));
+  printf("graded linear mesh: %zu triangles, min q %.4f, mean q %.4f\n", hoc_mesh_num_elements(lin),
+         st.min, st.mean);
+  CHECK(st.tangled == 0);
+  CHECK(st.min > 0.15);
+  CHECK(hoc_mesh_num_elements(lin) < 800); /* 545 ungraded */
+
+  /* the field made from that mesh: its short curve is still short at
+   * ratio 1 (its triangles' edges are longer than it), and nowhere at
+   * a ratio above the mesh's longest edge over the curve */
+  double L = 0.0014 * sqrt(2.0);
+  CHECK_OK(hoc_linear_grading_make(lin, 1000 * hmax / L, hmin, hmax, 8, NULL, &g));
+  CHECK(g == NULL);
+  CHECK_OK(hoc_linear_grading_make(lin, 1, hmin, hmax, 8, NULL, &g));
+  if (!g) goto out;
+  CHECK(hoc_linear_grading_segments(g) >= 1);
+  CHECK(fabs(hoc_linear_grading_min_size(g) - L) < 1e-9);
+  const double far[3] = {5, 5, 0}, corner[3] = {0.0007, 9.9993, 0}, near[3] = {0.0507, 9.9993, 0};
+  double h_far = hoc_linear_grading_size(g, far), h_corner = hoc_linear_grading_size(g, corner),
+         h_near = hoc_linear_grading_size(g, near);
+  printf("sizes: %.6g far (max %.6g), %.6g on the short curve, %.6g at 0.05 from it\n", h_far,
+         hmax, h_corner, h_near);
+  /* the short curve is the segment a-b; near's foot on it is a */
+  const double a[3] = {0.0014, 10, 0};
+  double d = sqrt((near[0] - a[0]) * (near[0] - a[0]) + (near[1] - a[1]) * (near[1] - a[1]));
+  CHECK(fabs(h_far - hmax) < 1e-12 * hmax);
+  CHECK(fabs(h_corner - HOC_LINEAR_SHORT_SIZE * L) < 1e-12);
+  CHECK(fabs(h_near - (HOC_LINEAR_SHORT_SIZE * L + HOC_LINEAR_GRADE * d)) < 1e-12);
+out:
+  hoc_linear_grading_free(&g);
+  hoc_mesh_destroy(&lin);
+  hoc_model_destroy(&model);
+  return test_report();
+}
