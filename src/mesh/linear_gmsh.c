@@ -617,6 +617,10 @@ static double size_at(int dim, int tag, double x, double y, double z, void *data
 /* The mesh with the options' sizes (and face_size's bounds). */
 static hoc_status generate_sized(hoc_model *model, const hoc_linear_options *options,
                                  const int *algorithm, hoc_mesh **mesh) {
+  HOC_CHECK(mesh, HOC_ERR_ARGUMENT, "mesh output is NULL");
+  *mesh = NULL;
+  HOC_CHECK(model && model->is_gmsh, HOC_ERR_ARGUMENT,
+            "linear meshing needs a model opened from a CAD file");
   for (int f = 0; algorithm && f < model->n_faces; ++f)
     HOC_CHECK(algorithm[f] >= 0 && algorithm[f] <= HOC_GMSH_ALGORITHM_MAX, HOC_ERR_ARGUMENT,
               "meshing algorithm %d of face %d is not one of gmsh's (0..%d)", algorithm[f],
@@ -700,12 +704,13 @@ static hoc_status better(const hoc_mesh *a, const hoc_mesh *b, int *yes) {
   return HOC_OK;
 }
 
+hoc_status hoc_mesh_generate_linear_ungraded(hoc_model *model, const hoc_linear_options *options,
+                                             hoc_mesh **mesh) {
+  return generate_sized(model, options, NULL, mesh);
+}
+
 hoc_status hoc_mesh_generate_linear_with(hoc_model *model, const hoc_linear_options *options,
                                          const int *algorithm, hoc_mesh **mesh) {
-  HOC_CHECK(mesh, HOC_ERR_ARGUMENT, "mesh output is NULL");
-  *mesh = NULL;
-  HOC_CHECK(model && model->is_gmsh, HOC_ERR_ARGUMENT,
-            "linear meshing needs a model opened from a CAD file");
   HOC_TRY(generate_sized(model, options, algorithm, mesh));
   /* curves far shorter than the mesh around them: the mesh made again
    * with sizes graded down to them (HOC_LINEAR_SHORT_RATIO) */

@@ -320,6 +320,11 @@ hoc_status hoc_mesh_generate_linear_with(hoc_model *model, const hoc_linear_opti
 #define HOC_LINEAR_SHORT_SIZE 5
 #define HOC_LINEAR_GRADE 2
 
+/* hoc_mesh_generate_linear without that grading: gmsh's mesh at the
+ * options' sizes alone (tests take it as the mesh gmsh makes). */
+hoc_status hoc_mesh_generate_linear_ungraded(hoc_model *model, const hoc_linear_options *options,
+                                             hoc_mesh **mesh);
+
 typedef struct hoc_linear_grading hoc_linear_grading;
 /* The size field of a mesh made again from lin, made by gmsh with sizes
  * hmin..hmax, ncurv elements per 2 pi of curvature radius and face_size's
