@@ -50,13 +50,16 @@ static double dist2(const double *a, const double *b) {
 
 /* Distance from x to the segment a-b. */
 static double seg_dist(const double *x, const double *a, const double *b) {
-  double ab[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, ax[3] = {x[0] - a[0], x[1] - a[1],
-                                                                   x[2] - a[2]};
-  double l2 = ab[0] * ab[0] + ab[1] * ab[1] + ab[2] * ab[2];
-  double t = l2 > 0 ? (ab[0] * ax[0] + ab[1] * ax[1] + ab[2] * ax[2]) / l2 : 0;
+  double ab[3], ax[3], p[3];
+  for (int d = 0; d < 3; ++d) {
+    ab[d] = b[d] - a[d];
+    ax[d] = x[d] - a[d];
+  }
+  double l2 = hoc_dot3(ab, ab), t = l2 > 0 ? hoc_dot3(ab, ax) / l2 : 0;
   t = t < 0 ? 0 : t > 1 ? 1 : t;
-  double p[3] = {a[0] + t * ab[0], a[1] + t * ab[1], a[2] + t * ab[2]};
-  return sqrt(dist2(x, p));
+  for (int d = 0; d < 3; ++d)
+    p[d] = a[d] + t * ab[d];
+  return hoc_dist3(x, p);
 }
 
 #define CELL_BITS 21
@@ -180,7 +183,7 @@ static hoc_status node_sizes(const hoc_mesh *lin, double hmin, double hmax, doub
   for (size_t e = 0; e < lin->n_elems; ++e)
     for (size_t k = 0; k < 3; ++k) {
       size_t a = lin->conn[3 * e + k], b = lin->conn[3 * e + (k + 1) % 3];
-      double l = sqrt(dist2(lin->xyz + 3 * a, lin->xyz + 3 * b));
+      double l = hoc_dist3(lin->xyz + 3 * a, lin->xyz + 3 * b);
       sum[a] += l, sum[b] += l;
       count[a]++, count[b]++;
     }
@@ -215,7 +218,7 @@ static hoc_status short_curves(const hoc_mesh *lin, double ratio, hoc_linear_gra
   for (size_t e = 0; e < lin->n_elems; ++e)
     for (size_t k = 0; k < 3; ++k) {
       size_t a = lin->conn[3 * e + k], b = lin->conn[3 * e + (k + 1) % 3];
-      double l = sqrt(dist2(lin->xyz + 3 * a, lin->xyz + 3 * b));
+      double l = hoc_dist3(lin->xyz + 3 * a, lin->xyz + 3 * b);
       longest[a] = fmax(longest[a], l);
       longest[b] = fmax(longest[b], l);
     }
@@ -223,7 +226,7 @@ static hoc_status short_curves(const hoc_mesh *lin, double ratio, hoc_linear_gra
   for (size_t l = 0; l < lin->n_lines; ++l) {
     int c = lin->line_curve[l];
     size_t a = lin->line_conn[2 * l], b = lin->line_conn[2 * l + 1];
-    len[c] += sqrt(dist2(lin->xyz + 3 * a, lin->xyz + 3 * b));
+    len[c] += hoc_dist3(lin->xyz + 3 * a, lin->xyz + 3 * b);
     around[c] = fmax(around[c], fmax(longest[a], longest[b]));
   }
   *n = 0;
@@ -256,8 +259,8 @@ static hoc_status node_grid(const hoc_mesh *lin, const double *h, hoc_linear_gra
   double sum = 0;
   for (size_t e = 0; e < ne; ++e)
     for (size_t k = 0; k < 3; ++k)
-      sum += sqrt(dist2(lin->xyz + 3 * lin->conn[3 * e + k],
-                        lin->xyz + 3 * lin->conn[3 * e + (k + 1) % 3]));
+      sum += hoc_dist3(lin->xyz + 3 * lin->conn[3 * e + k],
+                       lin->xyz + 3 * lin->conn[3 * e + (k + 1) % 3]);
   g->cell = fmax(ne ? sum / (double)(3 * ne) : 0, 1e-9 * model->diagonal);
   /* (at most 2^21 cells a side: coarser where the model is wider) */
   for (int d = 0; d < 3; ++d) {

@@ -678,6 +678,10 @@ static hoc_status linear_quality(const hoc_mesh *m, size_t *tangled, double *qmi
   HOC_CHECK(q, HOC_ERR_MEMORY, "out of memory");
   hoc_quality_stats st;
   hoc_status status = hoc_mesh_measure(m, HOC_MEASURE_SHAPE, q, NULL, &st);
+  if (status != HOC_OK) {
+    free(q);
+    return status;
+  }
   *tangled = st.tangled;
   *qmin = INFINITY;
   for (size_t e = 0; e < ne; ++e) {
@@ -688,7 +692,7 @@ static hoc_status linear_quality(const hoc_mesh *m, size_t *tangled, double *qmi
   }
   if (!isfinite(*qmin)) *qmin = st.min;
   free(q);
-  return status;
+  return HOC_OK;
 }
 
 /* Whether mesh a is the better linear mesh: fewer faces failed, then fewer
