@@ -11,15 +11,25 @@
  * it every triangle has q above 0.15 (573 triangles). The size field
  * itself against its closed form: on the plane (no curvature) the largest
  * size away from the short curve, HOC_LINEAR_SHORT_SIZE x its length plus
- * HOC_LINEAR_GRADE x the distance near it.
+ * HOC_LINEAR_GRADE x the distance near it. hoc_mesh_model notes it.
  * SPDX-License-Identifier: GPL-2.0-or-later */
 #include "mesh/mesh.h"
 #include "test_util.h"
 
 #include <math.h>
 #include <stdio.h>
+#include <string.h>
 
 #define DATA HOC_SOURCE_DIR "/tests/data/"
+
+/* Counts the notes of a linear mesh graded down to one curve. */
+static int on_event(void *user, const hoc_event *ev) {
+  if (ev->kind == HOC_EVENT_NOTE && ev->message &&
+      strstr(ev->message, "graded down to 1 CAD curve(s)") &&
+      strstr(ev->message, "(gmsh's own mesh: "))
+    ++*(int *)user;
+  return 0;
+}
 
 int main(void) {
   hoc_model *model = NULL;
@@ -49,6 +59,10 @@ int main(void) {
     printf("gmsh's linear mesh: %zu triangles, min q %.4f\n", hoc_mesh_num_elements(first), s0.min);
     CHECK(s0.min < 0.01);
     CHECK(hoc_mesh_num_elements(lin) < 1.5 * (double)hoc_mesh_num_elements(first));
+    /* what the graded mesh records of it, for the pipeline's note */
+    CHECK(lin->graded_curves == 1);
+    CHECK(lin->ungraded_elements == hoc_mesh_num_elements(first));
+    CHECK(lin->ungraded_min_q == s0.min);
     hoc_mesh_destroy(&first);
   }
 
@@ -73,6 +87,19 @@ int main(void) {
   CHECK(fabs(h_far - hmax) < 1e-12 * hmax);
   CHECK(fabs(h_corner - HOC_LINEAR_SHORT_SIZE * L) < 1e-12);
   CHECK(fabs(h_near - (HOC_LINEAR_SHORT_SIZE * L + HOC_LINEAR_GRADE * d)) < 1e-12);
+  /* hoc_mesh_model says so */
+  hoc_mesh_options mo;
+  hoc_mesh_options_default(&mo);
+  mo.order = 2;
+  mo.event = on_event;
+  int noted = 0;
+  mo.event_user = &noted;
+  hoc_mesh *ho = NULL;
+  hoc_report *rep = NULL;
+  CHECK_OK(hoc_mesh_model(model, &mo, &ho, &rep));
+  CHECK(noted == 1);
+  hoc_report_destroy(&rep);
+  hoc_mesh_destroy(&ho);
 out:
   hoc_linear_grading_free(&g);
   hoc_mesh_destroy(&lin);

@@ -41,6 +41,7 @@ struct hoc_linear_grading {
   size_t n_seg;
   double *seg, *seg_h;
   double min_size;
+  int n_curves; /* the short curves */
 };
 
 static double dist2(const double *a, const double *b) {
@@ -230,6 +231,8 @@ static hoc_status short_curves(const hoc_mesh *lin, double ratio, hoc_linear_gra
     around[c] = fmax(around[c], fmax(longest[a], longest[b]));
   }
   *n = 0;
+  for (size_t c = 0; g && c < nc; ++c)
+    g->n_curves += len[c] > 0 && around[c] > ratio * len[c];
   for (size_t l = 0; l < lin->n_lines; ++l) {
     int c = lin->line_curve[l];
     if (!(len[c] > 0 && around[c] > ratio * len[c])) continue;
@@ -341,6 +344,8 @@ done:
 }
 
 size_t hoc_linear_grading_segments(const hoc_linear_grading *g) { return g ? g->n_seg : 0; }
+
+int hoc_linear_grading_curves(const hoc_linear_grading *g) { return g ? g->n_curves : 0; }
 
 double hoc_linear_grading_min_size(const hoc_linear_grading *g) { return g->min_size; }
 

@@ -670,9 +670,10 @@ static double graded_size(int dim, int tag, double x, double y, double z, void *
   return hoc_linear_grading_size(data, p);
 }
 
-/* The inverted triangles of m and its smallest q away from poles (q is 0
- * at a corner where phi_u x phi_v vanishes, in every mesh of the face). */
-static hoc_status linear_quality(const hoc_mesh *m, size_t *tangled, double *qmin) {
+/* The inverted triangles of m, its smallest q away from poles (q is 0 at
+ * a corner where phi_u x phi_v vanishes, in every mesh of the face) and
+ * its smallest q (*all). */
+static hoc_status linear_quality(const hoc_mesh *m, size_t *tangled, double *qmin, double *all) {
   size_t ne = m->n_elems;
   double *q = hoc_calloc(ne + 1, sizeof *q);
   HOC_CHECK(q, HOC_ERR_MEMORY, "out of memory");
@@ -683,6 +684,7 @@ static hoc_status linear_quality(const hoc_mesh *m, size_t *tangled, double *qmi
     return status;
   }
   *tangled = st.tangled;
+  *all = st.min;
   *qmin = INFINITY;
   for (size_t e = 0; e < ne; ++e) {
     int at_pole = 0;
@@ -696,12 +698,13 @@ static hoc_status linear_quality(const hoc_mesh *m, size_t *tangled, double *qmi
 }
 
 /* Whether mesh a is the better linear mesh: fewer faces failed, then fewer
- * inverted triangles, then a higher smallest q away from poles. */
-static hoc_status better(const hoc_mesh *a, const hoc_mesh *b, int *yes) {
+ * inverted triangles, then a higher smallest q away from poles; *b_min:
+ * b's smallest q. */
+static hoc_status better(const hoc_mesh *a, const hoc_mesh *b, int *yes, double *b_min) {
   size_t ta, tb;
-  double qa, qb;
-  HOC_TRY(linear_quality(a, &ta, &qa));
-  HOC_TRY(linear_quality(b, &tb, &qb));
+  double qa, qb, a_min;
+  HOC_TRY(linear_quality(a, &ta, &qa, &a_min));
+  HOC_TRY(linear_quality(b, &tb, &qb, b_min));
   if (a->n_failed_faces != b->n_failed_faces) *yes = a->n_failed_faces < b->n_failed_faces;
   else if (ta != tb) *yes = ta < tb;
   else *yes = qa > qb;
@@ -740,8 +743,12 @@ hoc_status hoc_mesh_generate_linear_with(hoc_model *model, const hoc_linear_opti
   if (status == HOC_ERR_INTERRUPTED || status == HOC_ERR_MEMORY) goto done;
   /* (a graded mesh gmsh fails on leaves the first) */
   status = HOC_OK;
-  if (graded) HOC_TRY_GOTO(better(graded, *mesh, &keep), done);
+  double first_q = 0;
+  if (graded) HOC_TRY_GOTO(better(graded, *mesh, &keep, &first_q), done);
   if (keep) {
+    graded->graded_curves = hoc_linear_grading_curves(g);
+    graded->ungraded_elements = (*mesh)->n_elems;
+    graded->ungraded_min_q = first_q;
     hoc_mesh_destroy(mesh);
     *mesh = graded;
     graded = NULL;

@@ -54,6 +54,10 @@ struct hoc_mesh {
   signed char *face_orient; /* [n_faces] +1 if element normals follow phi_u x phi_v, -1 if
                                opposite, 0 if the face has no elements */
   size_t n_collapsed;       /* triangles dropped at collapsed sides (collapse.c) */
+  int graded_curves;        /* a linear mesh graded down to this many short CAD curves
+                               (grading.c), and gmsh's own mesh's triangles and min q */
+  size_t ungraded_elements;
+  double ungraded_min_q;
   int n_failed_faces;
   int *failed_faces;        /* [n_failed_faces] face indices the mesher could not mesh */
   double off_cad;           /* largest distance of a given node position from its entity
@@ -335,8 +339,9 @@ hoc_status hoc_linear_grading_make(const hoc_mesh *lin, double ratio, double hmi
                                    double ncurv, const double *face_size,
                                    hoc_linear_grading **g);
 void hoc_linear_grading_free(hoc_linear_grading **g);
-/* Segments of the short curves; the shortest curve's length. */
+/* Segments of the short curves, the curves; the shortest curve's length. */
 size_t hoc_linear_grading_segments(const hoc_linear_grading *g);
+int hoc_linear_grading_curves(const hoc_linear_grading *g);
 double hoc_linear_grading_min_size(const hoc_linear_grading *g);
 /* The size at x. */
 double hoc_linear_grading_size(const hoc_linear_grading *g, const double *x);

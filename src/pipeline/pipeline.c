@@ -119,6 +119,17 @@ static hoc_status warn_failed_faces(const hoc_run *run, const hoc_mesh *lin) {
                        faces, nfail > 30 ? " ..." : "");
 }
 
+/* A linear mesh graded down to short CAD curves (mesh/grading.c). */
+static hoc_status note_graded(const hoc_run *run, const hoc_mesh *lin) {
+  if (!lin->graded_curves) return HOC_OK;
+  return hoc_run_event(run, HOC_EVENT_NOTE,
+                       "the linear mesh is graded down to %d CAD curve(s) shorter than a tenth "
+                       "of the edges around them: %zu triangles (gmsh's own mesh: %zu, min q "
+                       "%.4f)",
+                       lin->graded_curves, lin->n_elems, lin->ungraded_elements,
+                       lin->ungraded_min_q);
+}
+
 /* Triangles the assembly dropped at collapsed sides (mesh/collapse.c). */
 static hoc_status note_collapsed(const hoc_run *run, const hoc_mesh *lin) {
   if (!lin->n_collapsed) return HOC_OK;
@@ -369,6 +380,7 @@ static hoc_status mesh_model_run(const hoc_run *run, hoc_model *model, model_mes
     double t_lin = hoc_pipeline_now() - t0;
     HOC_TRY_GOTO(warn_failed_faces(run, m->lin), done);
     HOC_TRY_GOTO(note_collapsed(run, m->lin), done);
+    HOC_TRY_GOTO(note_graded(run, m->lin), done);
     HOC_TRY_GOTO(hoc_run_stage(run, r, "linear", m->lin, t_lin, NULL, NULL), done);
     *final = m->lin;
     if (o->order > 1) {
