@@ -744,7 +744,8 @@ hoc_status hoc_mesh_generate_linear_with(hoc_model *model, const hoc_linear_opti
   /* (a graded mesh gmsh fails on leaves the first) */
   status = HOC_OK;
   double first_q = 0;
-  if (graded) HOC_TRY_GOTO(better(graded, *mesh, &keep, &first_q), done);
+  if (graded && graded->n_elems <= HOC_LINEAR_GRADED_GROWTH * (*mesh)->n_elems)
+    HOC_TRY_GOTO(better(graded, *mesh, &keep, &first_q), done);
   if (keep) {
     graded->graded_curves = hoc_linear_grading_curves(g);
     graded->ungraded_elements = (*mesh)->n_elems;
