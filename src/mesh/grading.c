@@ -386,11 +386,8 @@ static double background(const hoc_linear_grading *g, const double *x) {
       e2[d] = p2[d] - p0[d];
       w[d] = x[d] - p0[d];
     }
-    double a11 = e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2];
-    double a12 = e1[0] * e2[0] + e1[1] * e2[1] + e1[2] * e2[2];
-    double a22 = e2[0] * e2[0] + e2[1] * e2[1] + e2[2] * e2[2];
-    double r1 = e1[0] * w[0] + e1[1] * w[1] + e1[2] * w[2];
-    double r2 = e2[0] * w[0] + e2[1] * w[1] + e2[2] * w[2];
+    double a11 = hoc_dot3(e1, e1), a12 = hoc_dot3(e1, e2), a22 = hoc_dot3(e2, e2);
+    double r1 = hoc_dot3(e1, w), r2 = hoc_dot3(e2, w);
     double det = a11 * a22 - a12 * a12;
     if (!(det > 0)) continue;
     double b1 = (a22 * r1 - a12 * r2) / det, b2 = (a11 * r2 - a12 * r1) / det, b0 = 1 - b1 - b2;
