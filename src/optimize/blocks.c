@@ -18,7 +18,8 @@
  * returned when out of memory). */
 static uint32_t *narrow(hoc_growlist *g) {
   uint32_t *w = hoc_realloc(NULL, g->n ? g->n : 1, sizeof *w);
-  for (size_t i = 0; w && i < g->n; ++i) w[i] = (uint32_t)g->v[i];
+  for (size_t i = 0; w && i < g->n; ++i)
+    w[i] = (uint32_t)g->v[i];
   free(g->v);
   g->v = NULL;
   return w;
@@ -46,7 +47,8 @@ hoc_status hoc_opt_build_blocks(hoc_opt *o, int family) {
   int p = m->order;
   HOC_ALLOC(B->node_block, nn);
   if (family == 0) HOC_ALLOC(B->node_off, nn); /* (single nodes: offset 0) */
-  for (size_t i = 0; i < nn; ++i) B->node_block[i] = HOC_OPT_NO_BLOCK;
+  for (size_t i = 0; i < nn; ++i)
+    B->node_block[i] = HOC_OPT_NO_BLOCK;
   hoc_growlist start = {0}, nodes = {0};
   hoc_status status = HOC_OK;
   /* vertex blocks first, then edge blocks, then interior blocks */
@@ -99,9 +101,15 @@ hoc_status hoc_opt_build_blocks(hoc_opt *o, int family) {
   size_t nb = start.n;
   B->n_blocks = nb;
   HOC_TRY_GOTO(hoc_grow_push(&start, nodes.n), done);
+  /* (single nodes: block b is node bn_node[b], its elements the node's) */
+  if (family == 1) {
+    free(start.v);
+    start.v = NULL;
+  } else {
   B->bn_start = narrow(&start);
+  }
   B->bn_node = narrow(&nodes);
-  if (!B->bn_start || !B->bn_node) {
+  if ((family == 0 && !B->bn_start) || !B->bn_node) {
     status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
     goto done;
   }
@@ -114,24 +122,33 @@ hoc_status hoc_opt_build_blocks(hoc_opt *o, int family) {
   }
   for (size_t b = 0; b < nb; ++b) {
     int off = 0;
-    for (size_t a = B->bn_start[b]; a < B->bn_start[b + 1]; ++a) {
-      if (B->node_off) B->node_off[B->bn_node[a]] = off;
+    for (size_t a = hoc_opt_bn_begin(B, b); a < hoc_opt_bn_end(B, b); ++a) {
+      if (B->node_off) B->node_off[B->bn_node[a]] = (uint16_t)off;
       off += o->adj.ndof[B->bn_node[a]];
     }
     B->bd_start[b + 1] = B->bd_start[b] + (uint32_t)off;
     if (off > B->max_nd) B->max_nd = off;
   }
-  /* footprints: the elements of the block's nodes */
-  {
+  /* footprints: the elements of the block's nodes (a single node's are
+   * its own in the adjacency) */
+  int own = family == 1;
+  for (size_t k = 0; k < nn && own; ++k) /* (an element twice in a node's list: not its own) */
+    for (size_t a = o->adj.ne_start[k]; a + 1 < o->adj.ne_start[k + 1] && own; ++a)
+      own = o->adj.ne_elem[a] != o->adj.ne_elem[a + 1];
+  if (own) {
+    B->ne_start = o->adj.ne_start;
+    B->be_elem = o->adj.ne_elem;
+  } else {
     hoc_growlist fs = {0}, fe = {0};
     for (size_t b = 0; b < nb && status == HOC_OK; ++b) {
       status = hoc_grow_push(&fs, fe.n);
-      for (size_t a = B->bn_start[b]; a < B->bn_start[b + 1] && status == HOC_OK; ++a) {
+      for (size_t a = hoc_opt_bn_begin(B, b); a < hoc_opt_bn_end(B, b) && status == HOC_OK; ++a) {
         size_t i = B->bn_node[a];
         for (size_t c = o->adj.ne_start[i]; c < o->adj.ne_start[i + 1] && status == HOC_OK; ++c) {
           size_t e = o->adj.ne_elem[c];
           int seen = 0;
-          for (size_t d = fs.v[b]; d < fe.n && !seen; ++d) seen = fe.v[d] == e;
+          for (size_t d = fs.v[b]; d < fe.n && !seen; ++d)
+            seen = fe.v[d] == e;
           if (!seen) status = hoc_grow_push(&fe, e);
         }
       }
@@ -154,8 +171,8 @@ hoc_status hoc_opt_build_blocks(hoc_opt *o, int family) {
       last[i] = SIZE_MAX;
     for (size_t b = 0; b < nb && status == HOC_OK; ++b) {
       status = hoc_grow_push(&cs, cn.n);
-      size_t k = B->bn_node[B->bn_start[b]];
-      int vertex = family == 0 && B->bn_start[b + 1] - B->bn_start[b] == 1 && p >= 2 &&
+      size_t k = B->bn_node[hoc_opt_bn_begin(B, b)];
+      int vertex = family == 0 && hoc_opt_bn_end(B, b) - hoc_opt_bn_begin(B, b) == 1 && p >= 2 &&
                    o->adj.ndof[k] == 2;
       for (size_t a = o->adj.ne_start[k]; a < o->adj.ne_start[k + 1] && vertex; ++a)
         vertex = o->adj.ne_local[a] < 3;
@@ -210,9 +227,10 @@ hoc_status hoc_opt_build_blocks(hoc_opt *o, int family) {
       status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
       goto done;
     }
-    for (size_t b = 0; b < nb; ++b) color[b] = -1;
+    for (size_t b = 0; b < nb; ++b)
+      color[b] = -1;
     for (size_t b = 0; b < nb && status == HOC_OK; ++b) {
-      for (size_t a = B->be_start[b]; a < B->be_start[b + 1]; ++a) {
+      for (size_t a = hoc_opt_be_begin(B, b); a < hoc_opt_be_end(B, b); ++a) {
         const size_t *cn = m->conn + B->be_elem[a] * np;
         for (size_t k = 0; k < np; ++k) {
           uint32_t b2 = B->node_block[cn[k]];
@@ -220,7 +238,8 @@ hoc_status hoc_opt_build_blocks(hoc_opt *o, int family) {
         }
       }
       int c = 0;
-      while ((size_t)c < cap && stamp[c] == b + 1) ++c;
+      while ((size_t)c < cap && stamp[c] == b + 1)
+        ++c;
       if ((size_t)c >= cap) {
         size_t *s2 = hoc_realloc(stamp, 2 * cap, sizeof *s2);
         if (!s2) {
@@ -240,9 +259,11 @@ hoc_status hoc_opt_build_blocks(hoc_opt *o, int family) {
     if (status == HOC_OK && (!B->color_start || !B->color_block))
       status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
     if (status == HOC_OK) {
-      for (size_t b = 0; b < nb; ++b) B->color_start[color[b] + 1]++;
+      for (size_t b = 0; b < nb; ++b)
+        B->color_start[color[b] + 1]++;
       hoc_opt_csr_finish_counts((size_t)max_colors, B->color_start);
-      for (size_t b = 0; b < nb; ++b) B->color_block[B->color_start[color[b]]++] = (uint32_t)b;
+      for (size_t b = 0; b < nb; ++b)
+        B->color_block[B->color_start[color[b]]++] = (uint32_t)b;
       hoc_opt_csr_restore((size_t)max_colors, B->color_start);
       B->cpos = hoc_calloc(nb + 1, sizeof *B->cpos);
       B->cbd = hoc_calloc(nb + 1, sizeof *B->cbd);
@@ -256,12 +277,20 @@ hoc_status hoc_opt_build_blocks(hoc_opt *o, int family) {
         B->cbd[b] = (uint32_t)nd;
         nd += B->bd_start[b + 1] - B->bd_start[b];
       }
-      if (B->color_start[c + 1] - first > B->max_color) B->max_color = B->color_start[c + 1] - first;
+      if (B->color_start[c + 1] - first > B->max_color)
+        B->max_color = B->color_start[c + 1] - first;
       if (nd > B->max_color_nd) B->max_color_nd = nd;
     }
+    if (status == HOC_OK && max_colors > UINT16_MAX)
+      status = HOC_ERROR(HOC_ERR_ARGUMENT, "mesh too irregular for the optimiser (%d colours)",
+                         max_colors);
     if (status == HOC_OK) {
-      B->block_color = color;
-      color = NULL;
+      B->block_color = hoc_realloc(NULL, nb + 1, sizeof *B->block_color);
+      if (!B->block_color) status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
+      for (size_t b = 0; b < nb && B->block_color; ++b)
+        B->block_color[b] = (uint16_t)color[b];
+    }
+    if (status == HOC_OK) {
       B->queue_head = hoc_calloc((size_t)max_colors + 1, sizeof *B->queue_head);
       B->queue_next = hoc_calloc(nb + 1, sizeof *B->queue_next);
       B->queued = hoc_calloc(nb + 1, 1);
@@ -289,7 +318,7 @@ double hoc_opt_carry_weight(const hoc_opt *o, size_t b, size_t node) {
 }
 
 void hoc_opt_set_moving(hoc_opt *o, size_t b, unsigned char v) {
-  for (size_t a = o->B->bn_start[b]; a < o->B->bn_start[b + 1]; ++a)
+  for (size_t a = hoc_opt_bn_begin(o->B, b); a < hoc_opt_bn_end(o->B, b); ++a)
     o->node.moving[o->B->bn_node[a]] = v;
   for (size_t j = hoc_opt_carry_begin(o->B, b); j < hoc_opt_carry_end(o->B, b); ++j)
     o->node.moving[o->B->carry_node[j]] = v;
@@ -297,7 +326,7 @@ void hoc_opt_set_moving(hoc_opt *o, size_t b, unsigned char v) {
 
 static int block_active(const hoc_opt *o, size_t b) {
   int act = 0, near = !o->cfg.local;
-  for (size_t a = o->B->bn_start[b]; a < o->B->bn_start[b + 1]; ++a) {
+  for (size_t a = hoc_opt_bn_begin(o->B, b); a < hoc_opt_bn_end(o->B, b); ++a) {
     act |= o->node.active[o->B->bn_node[a]];
     near |= o->node.near[o->B->bn_node[a]];
   }
@@ -328,7 +357,8 @@ void hoc_opt_wake_all(hoc_opt *o) {
 
 /* Flags the nodes within HOC_OPT_NEAR_RINGS rings of a tangled element. */
 void hoc_opt_mark_near(hoc_opt *o) {
-  for (size_t e = 0; e < o->m->n_elems; ++e) o->el.near_e[e] = !o->el.valid[e];
+  for (size_t e = 0; e < o->m->n_elems; ++e)
+    o->el.near_e[e] = !o->el.valid[e];
   hoc_opt_grow_rings(o->m, o->el.near_e, o->node.near, HOC_OPT_NEAR_RINGS);
 }
 

@@ -18,14 +18,16 @@ static hoc_status block_f_at(hoc_opt *o, size_t b, int dof, double h, hoc_opt_sc
                              double *f) {
   double *st = hoc_opt_step_of(o, b);
   int nd = (int)(o->B->bd_start[b + 1] - o->B->bd_start[b]);
-  for (int c = 0; c < nd; ++c) st[c] = c == dof ? h : 0;
+  for (int c = 0; c < nd; ++c)
+    st[c] = c == dof ? h : 0;
   o->trial.alpha[hoc_opt_tb(o, b)] = 1;
   size_t n = 0;
-  size_t nlist = o->B->bn_start[b + 1] - o->B->bn_start[b] + hoc_opt_carry_end(o->B, b) -
+  size_t nlist = hoc_opt_bn_end(o->B, b) - hoc_opt_bn_begin(o->B, b) + hoc_opt_carry_end(o->B, b) -
                  hoc_opt_carry_begin(o->B, b);
   size_t *list = hoc_calloc(nlist + 1, sizeof *list);
   HOC_CHECK(list, HOC_ERR_MEMORY, "out of memory");
-  for (size_t c = o->B->bn_start[b]; c < o->B->bn_start[b + 1]; ++c) list[n++] = o->B->bn_node[c];
+  for (size_t c = hoc_opt_bn_begin(o->B, b); c < hoc_opt_bn_end(o->B, b); ++c)
+    list[n++] = o->B->bn_node[c];
   for (size_t j = hoc_opt_carry_begin(o->B, b); j < hoc_opt_carry_end(o->B, b); ++j)
     list[n++] = o->B->carry_node[j];
   hoc_status st2 = hoc_opt_trial_reserve(o, list, n);
@@ -37,18 +39,19 @@ static hoc_status block_f_at(hoc_opt *o, size_t b, int dof, double h, hoc_opt_sc
   HOC_TRY(st2);
   hoc_opt_set_moving(o, b, 1);
   *f = 0;
-  for (size_t a = o->B->be_start[b]; a < o->B->be_start[b + 1]; ++a) {
+  for (size_t a = hoc_opt_be_begin(o->B, b); a < hoc_opt_be_end(o->B, b); ++a) {
     size_t e = o->B->be_elem[a];
     hoc_opt_gather(o, e, s->x, s->n);
     int nr = hoc_opt_elem_residuals(o, e, s->x, s->n, NULL, NULL, s->r, NULL, NULL);
-    for (int q = 0; q < nr; ++q) *f += s->r[q] * s->r[q];
+    for (int q = 0; q < nr; ++q)
+      *f += s->r[q] * s->r[q];
   }
   hoc_opt_set_moving(o, b, 0);
   return HOC_OK;
 }
 
-hoc_status hoc_mesh_check_gradient(hoc_mesh *mesh, hoc_measure measure, int fix_curves,
-                                   int samples, double *max_rel_error) {
+hoc_status hoc_mesh_check_gradient(hoc_mesh *mesh, hoc_measure measure, int fix_curves, int samples,
+                                   double *max_rel_error) {
   HOC_CHECK(mesh && max_rel_error, HOC_ERR_ARGUMENT, "NULL argument");
   HOC_CHECK(samples > 0, HOC_ERR_ARGUMENT, "need at least one sample");
   hoc_opt ctx = {0};
@@ -72,8 +75,8 @@ hoc_status hoc_mesh_check_gradient(hoc_mesh *mesh, hoc_measure measure, int fix_
     int nd = (int)(ctx.B->bd_start[b + 1] - ctx.B->bd_start[b]);
     for (int d = 0; d < nd; ++d) {
       /* the node owning this unknown sets the scale of the step */
-      size_t k = ctx.B->bn_node[ctx.B->bn_start[b]];
-      for (size_t c = ctx.B->bn_start[b]; c < ctx.B->bn_start[b + 1]; ++c)
+      size_t k = ctx.B->bn_node[hoc_opt_bn_begin(ctx.B, b)];
+      for (size_t c = hoc_opt_bn_begin(ctx.B, b); c < hoc_opt_bn_end(ctx.B, b); ++c)
         if (hoc_opt_node_off(ctx.B, ctx.B->bn_node[c]) <= d) k = ctx.B->bn_node[c];
       int dd = d - hoc_opt_node_off(ctx.B, k);
       const double *dz = ctx.node.dz + 6 * k + 3 * dd;

@@ -63,11 +63,14 @@
  * node of the mesh, most of the optimiser's memory at high orders. */
 typedef struct hoc_opt_blockset {
   size_t n_blocks;
-  uint32_t *bn_start, *bn_node; /* block -> its nodes */
-  uint32_t *be_start, *be_elem; /* block -> the elements it touches */
+  uint32_t *bn_start, *bn_node; /* block -> its nodes (bn_start NULL: block b is node bn_node[b]) */
+  uint32_t *be_start, *be_elem; /* block -> the elements it touches (be_start NULL: block b's are
+                                   node bn_node[b]'s in the adjacency, ne_start, and be_elem is
+                                   hoc_opt_adjacency.ne_elem) */
+  const uint32_t *ne_start;     /* (hoc_opt_adjacency.ne_start where be_start is NULL) */
   uint32_t *bd_start;           /* block -> first of its unknowns */
   uint32_t *node_block;         /* [n_nodes] block of a free node (HOC_OPT_NO_BLOCK if fixed) */
-  int *node_off;                /* [n_nodes] offset of the node's unknowns in its block
+  uint16_t *node_off;           /* [n_nodes] offset of the node's unknowns in its block
                                    (NULL: every block is a single node, offset 0) */
   uint32_t *carry_start;        /* [n_blocks+1] nodes a vertex block carries (NULL: none) ... */
   uint32_t *carry_node;
@@ -83,7 +86,7 @@ typedef struct hoc_opt_blockset {
   size_t max_color, max_color_nd; /* most blocks and unknowns in a colour */
   /* Blocks woken since their colour last ran, per colour (most sleep: a
    * colour then looks at these instead of all its blocks) */
-  int *block_color;        /* [n_blocks] */
+  uint16_t *block_color;   /* [n_blocks] (hoc_opt_build_blocks checks the colours' count) */
   uint32_t *queue_head;    /* [n_colors] first queued block, HOC_OPT_NO_BLOCK if none */
   uint32_t *queue_next;    /* [n_blocks] next in its colour's queue */
   unsigned char *queued;   /* [n_blocks] */
@@ -201,6 +204,10 @@ typedef struct hoc_opt_frames {
   double *pool;   /* [cap][9][npts] */
 } hoc_opt_frames;
 
+/* Saved states of a run (journal.c): at most this many at once. */
+#define HOC_OPT_JOURNALS 2
+struct hoc_opt_journal;
+
 /* The optimiser's state. */
 typedef struct hoc_opt {
   hoc_mesh *m;
@@ -218,6 +225,8 @@ typedef struct hoc_opt {
   hoc_opt_settings cfg;
   hoc_opt_trial trial;
   hoc_opt_frames fc;
+  struct hoc_opt_journal *journal[HOC_OPT_JOURNALS]; /* the saved states that log moves */
+  size_t journal_entry_max; /* doubles of the largest node entry of a journal */
 } hoc_opt;
 
 typedef struct hoc_opt_scratch {
@@ -260,6 +269,37 @@ typedef struct hoc_opt_snapshot {
   double objective;
 } hoc_opt_snapshot;
 
+/* A saved state of a run kept as the old values of the nodes that moved
+ * since (journal.c): hoc_opt_commit logs a node before its first move.
+ * The state itself is the mesh's with the log written back. */
+typedef struct hoc_opt_journal {
+  unsigned char *saved; /* [n_nodes] the node is in the log */
+  size_t *node, *off;   /* log: node, and the first of its values in vals */
+  double *vals;
+  size_t n, cap, nv, vcap;
+  hoc_opt_snapshot copy; /* frozen: every node's state when the log grew too large */
+  int frozen;            /* the copy is taken: nothing more is logged */
+  int broken;            /* out of memory while logging: cannot be restored */
+  size_t tangled;        /* SIZE_MAX: none taken */
+  double objective;
+} hoc_opt_journal;
+
+/* Block b's nodes bn_node[begin .. end) and elements be_elem[begin .. end):
+ * single-node blocks keep no lists of their own (at order 10 a mesh has
+ * 50 nodes per element, and these lists would be 77 MB for nist_ftc_07). */
+static inline size_t hoc_opt_bn_begin(const hoc_opt_blockset *B, size_t b) {
+  return B->bn_start ? B->bn_start[b] : b;
+}
+static inline size_t hoc_opt_bn_end(const hoc_opt_blockset *B, size_t b) {
+  return B->bn_start ? B->bn_start[b + 1] : b + 1;
+}
+static inline size_t hoc_opt_be_begin(const hoc_opt_blockset *B, size_t b) {
+  return B->be_start ? B->be_start[b] : B->ne_start[B->bn_node[b]];
+}
+static inline size_t hoc_opt_be_end(const hoc_opt_blockset *B, size_t b) {
+  return B->be_start ? B->be_start[b + 1] : B->ne_start[B->bn_node[b] + 1];
+}
+
 /* Offset of node k's unknowns in its block of B. */
 static inline int hoc_opt_node_off(const hoc_opt_blockset *B, size_t k) {
   return B->node_off ? B->node_off[k] : 0;
@@ -273,9 +313,7 @@ static inline size_t hoc_opt_carry_end(const hoc_opt_blockset *B, size_t b) {
 }
 
 /* Block b's (of o->B) place in the trial's per-block arrays, and its step. */
-static inline size_t hoc_opt_tb(const hoc_opt *o, size_t b) {
-  return o->B->cpos[b];
-}
+static inline size_t hoc_opt_tb(const hoc_opt *o, size_t b) { return o->B->cpos[b]; }
 static inline double *hoc_opt_step_of(const hoc_opt *o, size_t b) {
   return o->trial.step + o->B->cbd[b];
 }
@@ -388,7 +426,8 @@ static inline double *hoc_opt_tdz(const hoc_opt *o, size_t k) {
  * a curve node one per face around it). */
 static inline size_t hoc_opt_tslot(const hoc_opt *o, size_t k, size_t s) {
   size_t j = o->adj.ns_start[k];
-  while (o->adj.ns_slot[j] != s) ++j;
+  while (o->adj.ns_slot[j] != s)
+    ++j;
   return o->trial.tsbase[o->trial.tix[k]] + (j - o->adj.ns_start[k]);
 }
 
@@ -417,6 +456,21 @@ hoc_status hoc_opt_scratch_alloc(const hoc_opt *o, int nthreads, hoc_opt_scratch
 void hoc_opt_scratch_free(hoc_opt_scratch *s, int nthreads);
 
 /* polish.c, phases.c, driver.c ------------------------------------------ */
+
+/* journal.c: saved states that log the nodes that move ------------------ */
+
+/* The mesh's state now as j (logged from here on by hoc_opt_commit). */
+hoc_status hoc_opt_journal_take(hoc_opt *o, hoc_opt_journal *j, size_t tangled, double f);
+/* Node k is about to change: the journals that have not logged it do. */
+void hoc_opt_journal_note(hoc_opt *o, size_t k);
+/* Up to `nodes` nodes are about to change in parallel: a journal whose log
+ * could outgrow its limit takes its copy first (serial). */
+hoc_status hoc_opt_journal_reserve(hoc_opt *o, size_t nodes);
+/* The mesh back to j's state (positions from the parameters of the nodes
+ * that differ); j stays the state of the mesh. */
+hoc_status hoc_opt_journal_restore(hoc_opt *o, hoc_opt_journal *j);
+/* j is no longer kept (its tangled count becomes SIZE_MAX). */
+void hoc_opt_journal_free(hoc_opt *o, hoc_opt_journal *j);
 
 /* The polish of the elements the exact test finds tangled. */
 hoc_status hoc_opt_polish(hoc_opt *o);

@@ -80,8 +80,8 @@ typedef struct run {
   double t0;                 /* ... and seconds counted from t0 */
   hoc_optimize_result res;
   int limited;               /* the sampled phase used all its sweeps, elements still tangled */
-  hoc_opt_snapshot best;     /* the state with the fewest tangled elements */
-  hoc_opt_snapshot pre;      /* the state before the polish */
+  hoc_opt_journal best; /* the state with the fewest tangled elements */
+  hoc_opt_journal pre;  /* the state before the polish */
   double f, qmin;            /* objective and smallest q at the last sweep_start */
   size_t tangled;            /* tangled elements at the last sweep_start */
   size_t fewest;             /* fewest tangled so far (res.best_iteration: when) */
@@ -115,9 +115,9 @@ static hoc_status restart_state(run *r) {
   return hoc_opt_sweep_start(&r->ctx, &r->f, &r->qmin, &r->tangled);
 }
 
-/* The mesh as in snapshot s, and every element's state from it. */
-static hoc_status restore(run *r, const hoc_opt_snapshot *s) {
-  HOC_TRY(hoc_opt_snapshot_restore(s, r->mesh));
+/* The mesh as in saved state s, and every element's state from it. */
+static hoc_status restore(run *r, hoc_opt_journal *s) {
+  HOC_TRY(hoc_opt_journal_restore(&r->ctx, s));
   HOC_TRY(hoc_opt_eval_all(&r->ctx));
   return restart_state(r);
 }
@@ -143,7 +143,7 @@ static hoc_status begin(run *r) {
   HOC_TRY(restart_state(r));
   r->res.objective_initial = r->f;
   r->fewest = r->tangled;
-  /* (the start's snapshot is taken in the first sweep, after the screening) */
+  /* (the start's state is saved in the first sweep, after the screening) */
   r->it = r->it0;
   r->res.best_iteration = r->it0;
   new_attempt(r, r->opts.max_iterations);
@@ -174,7 +174,8 @@ static hoc_status sweep(run *r, size_t *moved) {
   /* nodes near tangled elements and nodes of poor elements (those that set
    * the mesh's worst quality) never sleep */
   double qmean = 0;
-  for (size_t e = 0; e < mesh->n_elems; ++e) qmean += o->el.qe[e];
+  for (size_t e = 0; e < mesh->n_elems; ++e)
+    qmean += o->el.qe[e];
   qmean /= (double)(mesh->n_elems ? mesh->n_elems : 1);
   for (size_t e = 0; e < mesh->n_elems; ++e)
     if (o->el.region[e] || o->el.qe[e] < HOC_OPT_POOR_Q_SHARE * qmean) wake_element(r, e);
@@ -187,7 +188,7 @@ static hoc_status sweep(run *r, size_t *moved) {
     HOC_TRY(hoc_opt_screen(o));
     /* the start as the best state so far: taken once the screening's
      * memory is free (at high orders each is a large share of the mesh's) */
-    if (r->tangled) HOC_TRY(hoc_opt_snapshot_take(&r->best, r->mesh, r->tangled, r->f));
+    if (r->tangled) HOC_TRY(hoc_opt_journal_take(&r->ctx, &r->best, r->tangled, r->f));
     hoc_opt_wake_all(o);
     for (size_t e = 0; e < mesh->n_elems; ++e)
       if (o->el.qe[e] < HOC_OPT_POOR_Q_SHARE * qmean) wake_element(r, e);
@@ -221,7 +222,7 @@ static hoc_status after_sweep(run *r, size_t tangled_before) {
     r->cut = 1;
   }
   if (r->tangled && r->tangled < r->best.tangled)
-    HOC_TRY(hoc_opt_snapshot_take(&r->best, r->mesh, r->tangled, r->f));
+    HOC_TRY(hoc_opt_journal_take(&r->ctx, &r->best, r->tangled, r->f));
   /* untangling that stalls: the next delta of the cycle; back to the
    * smallest as soon as it moves on. Not in a local repair
    * (free_elements): there the relaxed region folds more than it opens,
@@ -279,14 +280,14 @@ static hoc_status run_sweeps(run *r, int *used_up) {
     HOC_TRY(hoc_opt_sweep_start(o, &r->f, &r->qmin, &r->tangled));
     HOC_TRY(after_sweep(r, tangled_before));
     if (r->opts.progress) {
-      hoc_optimize_iteration info = {r->it,  r->f,  r->qmin,
-                                     r->tangled, moved, hoc_opt_now() - r->t0,
-                                     1 + r->second};
+      hoc_optimize_iteration info = {
+          r->it, r->f, r->qmin, r->tangled, moved, hoc_opt_now() - r->t0, 1 + r->second};
       if (r->opts.progress(r->opts.progress_user, &info))
         return HOC_ERROR(HOC_ERR_INTERRUPTED, "optimisation interrupted");
     }
     size_t active = 0;
-    for (size_t i = 0; i < r->mesh->n_nodes; ++i) active += o->node.active[i];
+    for (size_t i = 0; i < r->mesh->n_nodes; ++i)
+      active += o->node.active[i];
     if (!active || !moved) {
       r->res.converged = r->settled = r->tangled == 0;
       if (r->tangled && !o->cfg.relax_uv && !o->adj.touched) {
@@ -340,7 +341,7 @@ static hoc_status exact_phase(run *r, phase *next) {
   *next = PHASE_POLISH;
   if (!(r->tangled > sampled && (!sampled || !r->res.stopped_at_limit))) return HOC_OK;
   r->res.diagnostics.exact_phase = r->it + 1;
-  HOC_TRY(hoc_opt_snapshot_take(&r->best, r->mesh, r->tangled, r->f));
+  HOC_TRY(hoc_opt_journal_take(&r->ctx, &r->best, r->tangled, r->f));
   r->fewest = r->tangled;
   r->res.converged = 0;
   /* from HOC_OPT_EXACT_RELAX_UV_MIN_ORDER (tunables.h; r->rules) the
@@ -384,11 +385,14 @@ static hoc_status polish_phase(run *r, phase *next) {
   *next = PHASE_DONE;
   if (!(r->tangled && o->cfg.exact && !r->res.stopped_at_limit)) return HOC_OK;
   size_t before = r->tangled;
-  HOC_TRY(hoc_opt_snapshot_take(&r->pre, r->mesh, r->tangled, r->f));
+  HOC_TRY(hoc_opt_journal_take(&r->ctx, &r->pre, r->tangled, r->f));
   HOC_TRY(hoc_opt_polish(o));
   HOC_TRY(hoc_opt_sweep_start(o, &r->f, &r->qmin, &r->tangled));
+  hoc_status status = HOC_OK;
   if (r->tangled >= before) /* none untangled: the sweeps' state, whose shapes are better */
-    return restore(r, &r->pre);
+    status = restore(r, &r->pre);
+  hoc_opt_journal_free(o, &r->pre); /* (logs no more moves) */
+  if (status != HOC_OK || r->tangled >= before) return status;
   r->res.diagnostics.polished += before - r->tangled;
   if (r->tangled || r->smoothing) return HOC_OK;
   /* all valid now: sweeps again, which keep every element valid, smooth
@@ -427,8 +431,8 @@ hoc_status hoc_opt_run_rules(hoc_mesh *mesh, const hoc_optimize_options *options
   if (options) opts = *options;
   if (opts.max_iterations <= 0) opts.max_iterations = HOC_OPT_DEFAULT_MAX_ITERATIONS;
   if (!(opts.tolerance > 0)) opts.tolerance = HOC_OPT_DEFAULT_TOLERANCE;
-  HOC_CHECK(opts.measure == HOC_MEASURE_SHAPE || opts.measure == HOC_MEASURE_ODDY,
-            HOC_ERR_ARGUMENT, "unknown distortion measure %d", (int)opts.measure);
+  HOC_CHECK(opts.measure == HOC_MEASURE_SHAPE || opts.measure == HOC_MEASURE_ODDY, HOC_ERR_ARGUMENT,
+            "unknown distortion measure %d", (int)opts.measure);
   HOC_CHECK(opts.max_iterations <= HOC_OPT_MAX_ITERATIONS_LIMIT, HOC_ERR_ARGUMENT,
             "too many iterations requested");
   HOC_CHECK(isfinite(opts.tolerance), HOC_ERR_ARGUMENT, "tolerance must be a finite number");
@@ -437,8 +441,10 @@ hoc_status hoc_opt_run_rules(hoc_mesh *mesh, const hoc_optimize_options *options
   HOC_CHECK(r, HOC_ERR_MEMORY, "out of memory");
   r->mesh = mesh;
   r->opts = opts;
-  if (rules) r->rules = *rules;
-  else hoc_opt_rules_default(&r->rules);
+  if (rules)
+    r->rules = *rules;
+  else
+    hoc_opt_rules_default(&r->rules);
   r->nthreads = omp_get_max_threads();
   r->it0 = it0;
   r->t0 = t0;
@@ -448,8 +454,8 @@ hoc_status hoc_opt_run_rules(hoc_mesh *mesh, const hoc_optimize_options *options
   hoc_status status = hoc_mesh_update_xyz(mesh);
   if (status == HOC_OK) mesh->off_cad = 0;
   if (status == HOC_OK)
-    status = hoc_opt_setup(o, mesh, opts.measure, opts.fix_curves, opts.free_elements,
-                           opts.free_rings);
+    status =
+        hoc_opt_setup(o, mesh, opts.measure, opts.fix_curves, opts.free_elements, opts.free_rings);
   if (status == HOC_OK && r->rules.frame_pool_bytes != HOC_OPT_FRAME_POOL_BYTES)
     status = hoc_opt_frames_setup(o, r->rules.frame_pool_bytes);
   o->cfg.protect = protect; /* (setup clears the state) */
@@ -478,8 +484,8 @@ hoc_status hoc_opt_run_rules(hoc_mesh *mesh, const hoc_optimize_options *options
     case PHASE_DONE: break;
     }
   }
-  hoc_opt_snapshot_free(&r->pre);
-  hoc_opt_snapshot_free(&r->best);
+  hoc_opt_journal_free(o, &r->pre);
+  hoc_opt_journal_free(o, &r->best);
   r->res.objective_final = r->f;
   r->res.tangled_final = r->tangled;
   r->res.seconds = hoc_opt_now() - t0;

@@ -24,7 +24,7 @@ void hoc_opt_block_model(const hoc_opt *o, size_t b, hoc_opt_scratch *s, double 
   *f = 0;
   memset(g, 0, (size_t)nd * sizeof *g);
   memset(H, 0, (size_t)nd * (size_t)nd * sizeof *H);
-  for (size_t a = o->B->be_start[b]; a < o->B->be_start[b + 1]; ++a) {
+  for (size_t a = hoc_opt_be_begin(o->B, b); a < hoc_opt_be_end(o->B, b); ++a) {
     size_t e = o->B->be_elem[a];
     const size_t *cn = m->conn + e * (size_t)np;
     /* the block's nodes and those it carries: the columns of J it needs */
@@ -42,8 +42,8 @@ void hoc_opt_block_model(const hoc_opt *o, size_t b, hoc_opt_scratch *s, double 
       }
     }
     hoc_opt_gather(o, e, s->x, s->n);
-    int nr = hoc_opt_elem_residuals(o, e, s->x, s->n, hoc_opt_frames_of(o, e), s->nd, s->r, s->J,
-                                    NULL);
+    int nr =
+        hoc_opt_elem_residuals(o, e, s->x, s->n, hoc_opt_frames_of(o, e), s->nd, s->r, s->J, NULL);
     double *Jz = s->Jz; /* [nr][nd] */
     memset(Jz, 0, (size_t)nr * (size_t)nd * sizeof *Jz);
     for (int i = 0; i < np; ++i) {
@@ -64,19 +64,22 @@ void hoc_opt_block_model(const hoc_opt *o, size_t b, hoc_opt_scratch *s, double 
       *f += r * r;
       for (int c = 0; c < nd; ++c) {
         g[c] += 2 * r * jz[c];
-        for (int d = 0; d <= c; ++d) H[c * nd + d] += 2 * jz[c] * jz[d];
+        for (int d = 0; d <= c; ++d)
+          H[c * nd + d] += 2 * jz[c] * jz[d];
       }
     }
   }
   for (int c = 0; c < nd; ++c)
-    for (int d = c + 1; d < nd; ++d) H[c * nd + d] = H[d * nd + c];
+    for (int d = c + 1; d < nd; ++d)
+      H[c * nd + d] = H[d * nd + c];
 }
 
 /* Solve (H + mu diag(H)) x = -g by Cholesky, raising mu until it works.
  * L: [nd][nd] scratch. Returns 0 if no step could be found. */
 static int damped_solve(int nd, const double *H, const double *g, double *L, double *x) {
   double dmax = 0;
-  for (int c = 0; c < nd; ++c) dmax = fmax(dmax, H[c * nd + c]);
+  for (int c = 0; c < nd; ++c)
+    dmax = fmax(dmax, H[c * nd + c]);
   if (!(dmax > 0)) return 0;
   for (double mu = HOC_OPT_MU_FIRST; mu < HOC_OPT_MU_LAST; mu *= HOC_OPT_MU_GROWTH) {
     int ok = 1;
@@ -84,7 +87,8 @@ static int damped_solve(int nd, const double *H, const double *g, double *L, dou
       for (int d = 0; d <= c; ++d) {
         double v = H[c * nd + d];
         if (c == d) v += mu * fmax(H[c * nd + c], HOC_OPT_DIAG_FLOOR * dmax);
-        for (int k = 0; k < d; ++k) v -= L[c * nd + k] * L[d * nd + k];
+        for (int k = 0; k < d; ++k)
+          v -= L[c * nd + k] * L[d * nd + k];
         if (c == d) {
           if (!(v > 0)) {
             ok = 0;
@@ -98,12 +102,14 @@ static int damped_solve(int nd, const double *H, const double *g, double *L, dou
     if (!ok) continue;
     for (int c = 0; c < nd; ++c) { /* L y = -g */
       double v = -g[c];
-      for (int k = 0; k < c; ++k) v -= L[c * nd + k] * x[k];
+      for (int k = 0; k < c; ++k)
+        v -= L[c * nd + k] * x[k];
       x[c] = v / L[c * nd + c];
     }
     for (int c = nd - 1; c >= 0; --c) { /* L^T x = y */
       double v = x[c];
-      for (int k = c + 1; k < nd; ++k) v -= L[k * nd + c] * x[k];
+      for (int k = c + 1; k < nd; ++k)
+        v -= L[k * nd + c] * x[k];
       x[c] = v / L[c * nd + c];
     }
     return 1;
@@ -144,13 +150,13 @@ static int block_trial_flagged(const hoc_opt *o, size_t b, hoc_opt_scratch *s, d
                                double *f) {
   const hoc_mesh *m = o->m;
   *f = 0;
-  for (size_t a = o->B->bn_start[b]; a < o->B->bn_start[b + 1]; ++a) {
+  for (size_t a = hoc_opt_bn_begin(o->B, b); a < hoc_opt_bn_end(o->B, b); ++a) {
     size_t k = o->B->bn_node[a];
     if (m->dim[k] != HOC_ON_CURVE) continue;
     for (size_t c = o->adj.nl_start[k]; c < o->adj.nl_start[k + 1]; ++c)
       if (!hoc_opt_line_monotone(o, o->adj.nl_line[c])) return 0;
   }
-  for (size_t a = o->B->be_start[b]; a < o->B->be_start[b + 1]; ++a) {
+  for (size_t a = hoc_opt_be_begin(o->B, b); a < hoc_opt_be_end(o->B, b); ++a) {
     size_t e = o->B->be_elem[a];
     hoc_opt_gather(o, e, s->x, s->n);
     if (o->el.pvalid[e] && o->adj.on_boundary[e] && !relaxed_uv(o, e) &&
@@ -158,24 +164,25 @@ static int block_trial_flagged(const hoc_opt *o, size_t b, hoc_opt_scratch *s, d
       return 0;
     const double *fr = hoc_opt_frames_of(o, e);
     if (fr) {
-      double *tf = s->fr + (a - o->B->be_start[b]) * 9 * (size_t)o->fc.npts;
+      double *tf = s->fr + (a - hoc_opt_be_begin(o->B, b)) * 9 * (size_t)o->fc.npts;
       hoc_opt_frames_trial(o, e, fr, tf);
       fr = tf;
     }
     double smin;
     int nr = hoc_opt_elem_residuals(o, e, s->x, s->n, fr, NULL, s->r, NULL, &smin);
     if (o->el.valid[e] && !relaxed(o, e) && !(smin > 0)) return 0;
-    for (int q = 0; q < nr; ++q) *f += s->r[q] * s->r[q];
+    for (int q = 0; q < nr; ++q)
+      *f += s->r[q] * s->r[q];
   }
   if (!isfinite(*f) || !(*f <= fmax)) return 0;
   /* a candidate: the dense part of the tangle test (nodes, validation
    * lattice) for the elements that must stay valid */
-  for (size_t a = o->B->be_start[b]; a < o->B->be_start[b + 1]; ++a) {
+  for (size_t a = hoc_opt_be_begin(o->B, b); a < hoc_opt_be_end(o->B, b); ++a) {
     size_t e = o->B->be_elem[a];
     if (!o->el.valid[e] || relaxed(o, e)) continue;
     int exact = o->cfg.exact || (hoc_opt_guarded(o, e) && o->el.xvalid[e]);
     if (hoc_opt_frames_of(o, e)) {
-      const double *tf = s->fr + (a - o->B->be_start[b]) * 9 * (size_t)o->fc.npts;
+      const double *tf = s->fr + (a - hoc_opt_be_begin(o->B, b)) * 9 * (size_t)o->fc.npts;
       if (hoc_element_frames_tangled(o->t, tf, o->nq, o->fc.npts)) return 0;
       if (!exact) continue;
       hoc_opt_gather(o, e, s->x, s->n);
@@ -191,9 +198,9 @@ static int block_trial_flagged(const hoc_opt *o, size_t b, hoc_opt_scratch *s, d
 /* The kept frames of block b's elements become its trial's (accepted). */
 static void frames_accept(hoc_opt *o, size_t b, const hoc_opt_scratch *s) {
   size_t size = 9 * (size_t)o->fc.npts;
-  for (size_t a = o->B->be_start[b]; a < o->B->be_start[b + 1]; ++a) {
+  for (size_t a = hoc_opt_be_begin(o->B, b); a < hoc_opt_be_end(o->B, b); ++a) {
     double *fr = hoc_opt_frames_of(o, o->B->be_elem[a]);
-    if (fr) memcpy(fr, s->fr + (a - o->B->be_start[b]) * size, size * sizeof *fr);
+    if (fr) memcpy(fr, s->fr + (a - hoc_opt_be_begin(o->B, b)) * size, size * sizeof *fr);
   }
 }
 
@@ -207,14 +214,14 @@ static int block_trial(hoc_opt *o, size_t b, hoc_opt_scratch *s, double fmax, do
 
 /* Block b touches a tangled element or one next to it. */
 static int near_tangled(const hoc_opt *o, size_t b) {
-  for (size_t a = o->B->be_start[b]; a < o->B->be_start[b + 1]; ++a)
+  for (size_t a = hoc_opt_be_begin(o->B, b); a < hoc_opt_be_end(o->B, b); ++a)
     if (o->el.region[o->B->be_elem[a]] || !o->el.valid[o->B->be_elem[a]]) return 1;
   return 0;
 }
 
 /* Block b moves a node within HOC_OPT_NEAR_RINGS of a tangled element. */
 static int near_fold(const hoc_opt *o, size_t b) {
-  for (size_t a = o->B->bn_start[b]; a < o->B->bn_start[b + 1]; ++a)
+  for (size_t a = hoc_opt_bn_begin(o->B, b); a < hoc_opt_bn_end(o->B, b); ++a)
     if (o->node.near[o->B->bn_node[a]]) return 1;
   return 0;
 }
@@ -233,7 +240,7 @@ static hoc_status line_search(hoc_opt *o, size_t *list, size_t nt, size_t n_eval
     size_t ne_list = 0;
     for (size_t a = 0; a < nt; ++a) {
       size_t b = list[a];
-      for (size_t c = o->B->bn_start[b]; c < o->B->bn_start[b + 1]; ++c)
+      for (size_t c = hoc_opt_bn_begin(o->B, b); c < hoc_opt_bn_end(o->B, b); ++c)
         elist[ne_list++] = o->B->bn_node[c];
       for (size_t j = hoc_opt_carry_begin(o->B, b); j < hoc_opt_carry_end(o->B, b); ++j)
         elist[ne_list++] = o->B->carry_node[j];
@@ -254,7 +261,7 @@ static hoc_status line_search(hoc_opt *o, size_t *list, size_t nt, size_t n_eval
       int ok = block_trial(
           o, b, s, o->trial.f0[tb] + HOC_OPT_ARMIJO * o->trial.alpha[tb] * o->trial.slope[tb], &f);
       if (ok) {
-        for (size_t c = o->B->bn_start[b]; c < o->B->bn_start[b + 1]; ++c)
+        for (size_t c = hoc_opt_bn_begin(o->B, b); c < hoc_opt_bn_end(o->B, b); ++c)
           hoc_opt_commit(o, o->B->bn_node[c]);
         for (size_t j = hoc_opt_carry_begin(o->B, b); j < hoc_opt_carry_end(o->B, b); ++j)
           hoc_opt_commit(o, o->B->carry_node[j]);
@@ -273,7 +280,7 @@ static hoc_status line_search(hoc_opt *o, size_t *list, size_t nt, size_t n_eval
       }
       o->trial.state[tb] = 0;
       o->trial.committed[(*n_committed)++] = b;
-      size_t nodes = o->B->bn_start[b + 1] - o->B->bn_start[b];
+      size_t nodes = hoc_opt_bn_end(o->B, b) - hoc_opt_bn_begin(o->B, b);
       *moved += nodes;
       /* only a significant move wakes the neighbourhood (small ones would
        * spread waves of smaller ones through the whole mesh) */
@@ -283,7 +290,7 @@ static hoc_status line_search(hoc_opt *o, size_t *list, size_t nt, size_t n_eval
           !near_tangled(o, b))
         continue;
       /* wake every node of the elements it touches (itself included) */
-      for (size_t c = o->B->be_start[b]; c < o->B->be_start[b + 1]; ++c) {
+      for (size_t c = hoc_opt_be_begin(o->B, b); c < hoc_opt_be_end(o->B, b); ++c) {
         const size_t *cn = m->conn + o->B->be_elem[c] * (size_t)o->np;
         for (int i = 0; i < o->np; ++i)
           hoc_opt_wake_node(o, cn[i]);
@@ -291,7 +298,8 @@ static hoc_status line_search(hoc_opt *o, size_t *list, size_t nt, size_t n_eval
     }
     nt = keep;
   }
-  for (size_t a = 0; a < nt; ++a) o->trial.state[hoc_opt_tb(o, list[a])] = 0; /* gave up: asleep */
+  for (size_t a = 0; a < nt; ++a)
+    o->trial.state[hoc_opt_tb(o, list[a])] = 0; /* gave up: asleep */
 end:
   free(elist);
   return status;
@@ -309,7 +317,7 @@ hoc_status hoc_opt_do_color(hoc_opt *o, int color, hoc_opt_scratch *scr, int nth
   for (size_t a = 0; a < n; ++a) {
     size_t b = list[a];
     hoc_opt_scratch *s = &scr[omp_get_thread_num()];
-    for (size_t c = o->B->bn_start[b]; c < o->B->bn_start[b + 1]; ++c)
+    for (size_t c = hoc_opt_bn_begin(o->B, b); c < hoc_opt_bn_end(o->B, b); ++c)
       o->node.active[o->B->bn_node[c]] = 0;
     int nd = (int)(o->B->bd_start[b + 1] - o->B->bd_start[b]);
     double f;
@@ -320,10 +328,11 @@ hoc_status hoc_opt_do_color(hoc_opt *o, int color, hoc_opt_scratch *scr, int nth
     double *st = hoc_opt_step_of(o, b);
     if (!damped_solve(nd, s->H, s->g, s->L, st)) continue;
     double slope = 0;
-    for (int c = 0; c < nd; ++c) slope += s->g[c] * st[c];
+    for (int c = 0; c < nd; ++c)
+      slope += s->g[c] * st[c];
     /* limit every node's displacement to a quarter of its local size */
     double alpha = 1, len_max = 0;
-    for (size_t c = o->B->bn_start[b]; c < o->B->bn_start[b + 1]; ++c) {
+    for (size_t c = hoc_opt_bn_begin(o->B, b); c < hoc_opt_bn_end(o->B, b); ++c) {
       size_t k = o->B->bn_node[c];
       const double *dz = o->node.dz + 6 * k, *sk = st + hoc_opt_node_off(o->B, k);
       double dx[3];
@@ -350,11 +359,13 @@ hoc_status hoc_opt_do_color(hoc_opt *o, int color, hoc_opt_scratch *scr, int nth
     size_t c1 = c0, n_eval = 0;
     for (; c1 < nt; ++c1) {
       size_t b = list[c1];
-      size_t k = o->B->bn_start[b + 1] - o->B->bn_start[b] + hoc_opt_carry_end(o->B, b) -
+      size_t k = hoc_opt_bn_end(o->B, b) - hoc_opt_bn_begin(o->B, b) + hoc_opt_carry_end(o->B, b) -
                  hoc_opt_carry_begin(o->B, b);
       if (c1 > c0 && n_eval + k > HOC_OPT_TRIAL_NODES) break;
       n_eval += k;
     }
+    status = hoc_opt_journal_reserve(o, n_eval);
+    if (status == HOC_OK)
     status = line_search(o, list + c0, c1 - c0, n_eval, scr, nthreads, &n_committed, moved);
     c0 = c1;
   }
@@ -364,7 +375,7 @@ hoc_status hoc_opt_do_color(hoc_opt *o, int color, hoc_opt_scratch *scr, int nth
   for (size_t a = 0; a < n_committed; ++a) {
     size_t b = o->trial.committed[a];
     hoc_opt_scratch *s = &scr[omp_get_thread_num()];
-    for (size_t c = o->B->be_start[b]; c < o->B->be_start[b + 1]; ++c) {
+    for (size_t c = hoc_opt_be_begin(o->B, b); c < hoc_opt_be_end(o->B, b); ++c) {
       size_t e = o->B->be_elem[c];
       if (!o->el.valid[e] || !o->el.xvalid[e]) {
         hoc_opt_gather(o, e, s->x, s->n);

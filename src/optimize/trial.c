@@ -20,8 +20,8 @@ static hoc_status face_normal(const hoc_opt *o, int f, const double *uv, const d
   double c[3], a[3], b[3];
   hoc_opt_cross(du, dv, c);
   double len = sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
-  double scale = du[0] * du[0] + du[1] * du[1] + du[2] * du[2] + dv[0] * dv[0] +
-                 dv[1] * dv[1] + dv[2] * dv[2];
+  double scale =
+      du[0] * du[0] + du[1] * du[1] + du[2] * du[2] + dv[0] * dv[0] + dv[1] * dv[1] + dv[2] * dv[2];
   if (!(len > HOC_OPT_SINGULAR_NORMAL * scale)) {
     const hoc_cad_face *face = &o->model->faces[f];
     double p[2];
@@ -35,7 +35,8 @@ static hoc_status face_normal(const hoc_opt *o, int f, const double *uv, const d
     len = sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
   }
   double s = (o->m->face_orient[f] < 0 ? -1.0 : 1.0) / (len > 0 ? len : 1.0);
-  for (int k = 0; k < 3; ++k) n[k] = s * c[k];
+  for (int k = 0; k < 3; ++k)
+    n[k] = s * c[k];
   return HOC_OK;
 }
 
@@ -113,7 +114,7 @@ int hoc_opt_set_trial_params(hoc_opt *o, size_t b) {
   const double *st = hoc_opt_step_of(o, b);
   double al = o->trial.alpha[hoc_opt_tb(o, b)];
   int inside = 1;
-  for (size_t a = o->B->bn_start[b]; a < o->B->bn_start[b + 1]; ++a) {
+  for (size_t a = hoc_opt_bn_begin(o->B, b); a < hoc_opt_bn_end(o->B, b); ++a) {
     size_t k = o->B->bn_node[a];
     int off = hoc_opt_node_off(o->B, k);
     double *tp = hoc_opt_tpar(o, k);
@@ -229,6 +230,7 @@ int hoc_opt_line_monotone(const hoc_opt *o, size_t l) {
 void hoc_opt_commit(hoc_opt *o, size_t k) {
   hoc_mesh *m = o->m;
   int np = o->np;
+  hoc_opt_journal_note(o, k); /* (before the first change of k's state) */
   for (size_t a = o->adj.ne_start[k]; a < o->adj.ne_start[k + 1]; ++a)
     o->el.dirty[o->adj.ne_elem[a]] = 1;
   for (size_t a = o->adj.ne_start[k]; a < o->adj.ne_start[k + 1]; ++a) {

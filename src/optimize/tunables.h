@@ -200,9 +200,17 @@
  * of large blocks (the interiors of every element) holds most nodes of
  * the mesh (nist_ftc_07 at order 10: 4 million, 560 MB of trial state).
  * Its blocks share no element, so their line searches are independent and
- * run in parts of this many nodes with the same result; a part of 2^18
- * nodes (35 MB) still gives the threads thousands of blocks. */
-#define HOC_OPT_TRIAL_NODES ((size_t)1 << 18)
+ * run in parts of this many nodes with the same result; a part of 2^17
+ * nodes (17 MB) still gives the threads thousands of blocks. */
+#define HOC_OPT_TRIAL_NODES ((size_t)1 << 17)
+
+/* A run's saved states (the best reached while untangling, the state
+ * before the polish) log the nodes that move after them (journal.c): the
+ * exact phase moves only the nodes near its folds. A log that would pass
+ * 1/JOURNAL_SHARE of a copy of every node's parameters (nist_ftc_07 at
+ * order 10: 97 MB) takes that copy instead and logs no more, so a saved
+ * state never costs much more than the copy. */
+#define HOC_OPT_JOURNAL_SHARE 4
 
 /* Polish ----------------------------------------------------------------- */
 
