@@ -129,17 +129,17 @@ hoc_status hoc_opt_journal_take(hoc_opt *o, hoc_opt_journal *j, size_t tangled, 
 void hoc_opt_journal_note(hoc_opt *o, size_t k) {
   for (int i = 0; i < HOC_OPT_JOURNALS; ++i) {
     hoc_opt_journal *j = o->journal[i];
-    if (!j || j->frozen || j->broken || j->saved[k]) continue;
-    hoc_status s;
+    if (!j || j->frozen || j->saved[k]) continue;
+    /* (out of memory, the journal cannot give its state back: restoring
+     * it fails; broken is read and written in the critical section) */
     if (omp_in_parallel()) {
 #pragma omp critical(hoc_opt_journal)
-      s = append(o, j, k);
-    } else {
-      s = append(o, j, k);
+      if (!j->broken && append(o, j, k) != HOC_OK) j->broken = 1;
+    } else if (!j->broken) {
+      hoc_status s = append(o, j, k);
       if (s == HOC_OK && log_bytes(j) > log_limit(o)) s = freeze(o, j);
+      if (s != HOC_OK) j->broken = 1;
     }
-    /* (the journal cannot give its state back: restoring it fails) */
-    if (s != HOC_OK) j->broken = 1;
   }
 }
 
