@@ -74,6 +74,25 @@ static hoc_status build_lookup(int n, const int *tags, size_t stride, int **look
 
 enum { PROBES = 9 };
 
+/* The largest |phi_u| and |phi_v| of face f at PROBES^2 points inside it:
+ * the scales against which a stalled derivative is zero
+ * (hoc_cad_face_singular). */
+static hoc_status derivative_scales(hoc_model *m, hoc_cad_face *f) {
+  double uv[2 * PROBES * PROBES], du[3 * PROBES * PROBES], dv[3 * PROBES * PROBES];
+  for (int i = 0; i < PROBES; ++i)
+    for (int j = 0; j < PROBES; ++j) {
+      uv[2 * (i * PROBES + j)] = f->lo[0] + (i + 0.5) / PROBES * (f->hi[0] - f->lo[0]);
+      uv[2 * (i * PROBES + j) + 1] = f->lo[1] + (j + 0.5) / PROBES * (f->hi[1] - f->lo[1]);
+    }
+  HOC_TRY(m->ops->face_eval(m->ctx, f, PROBES * PROBES, uv, NULL, du, dv));
+  f->du_scale = f->dv_scale = 0;
+  for (int k = 0; k < PROBES * PROBES; ++k) {
+    f->du_scale = fmax(f->du_scale, sqrt(hoc_dot3(du + 3 * k, du + 3 * k)));
+    f->dv_scale = fmax(f->dv_scale, sqrt(hoc_dot3(dv + 3 * k, dv + 3 * k)));
+  }
+  return HOC_OK;
+}
+
 /* Closed directions and poles of a face, measured: side u = lo is a pole if
  * phi(lo, v) is one point for all v; u is closed if phi(lo, v) = phi(hi, v). */
 static hoc_status detect_face_topology(hoc_model *m, hoc_cad_face *f, double tol) {
@@ -91,6 +110,7 @@ static hoc_status detect_face_topology(hoc_model *m, hoc_cad_face *f, double tol
     }
   }
   HOC_TRY(m->ops->face_eval(m->ctx, f, 4 * PROBES, uv, xyz, NULL, NULL));
+  HOC_TRY(derivative_scales(m, f));
   double spread[4];
   for (int side = 0; side < 4; ++side) {
     spread[side] = 0;
@@ -547,4 +567,12 @@ hoc_status hoc_cad_curve_invert(const hoc_model *m, int curve, const double xyz[
   }
   *dist = d;
   return HOC_OK;
+}
+
+int hoc_cad_face_singular(const hoc_cad_face *f, const double du[3], const double dv[3]) {
+  double n[3];
+  hoc_cross3(du, dv, n);
+  double a = hoc_dot3(du, du), b = hoc_dot3(dv, dv);
+  if (!(sqrt(hoc_dot3(n, n)) > 1e-10 * (a + b))) return 1;
+  return sqrt(a) < HOC_CAD_STALL * f->du_scale || sqrt(b) < HOC_CAD_STALL * f->dv_scale;
 }

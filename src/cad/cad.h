@@ -31,7 +31,20 @@ typedef struct hoc_cad_face {
    * g01, g11); a curve's parameters on it are those of its points' feet */
   unsigned char plane;
   double plane_o[3], plane_a[3], plane_b[3], plane_g[3];
+  /* largest |phi_u| and |phi_v| at interior sample points (hoc_cad_finish):
+   * a derivative below HOC_CAD_STALL x these is zero to the model's precision */
+  double du_scale, dv_scale;
 } hoc_cad_face;
+
+/* Relative size below which a face derivative is taken as zero: a side
+ * where phi_u (or phi_v) stalls (B-spline control rows that coincide to the
+ * file's digits) has phi_u x phi_v tiny but of rounding direction there. */
+#define HOC_CAD_STALL 1e-5
+
+/** Whether phi_u x phi_v at a point with derivatives du, dv of face f is
+ *  rounding: it vanishes next to |du|, |dv|, or one of them is zero to the
+ *  face's scale. */
+int hoc_cad_face_singular(const hoc_cad_face *f, const double du[3], const double dv[3]);
 
 typedef struct hoc_cad_curve {
   int tag;
@@ -188,10 +201,16 @@ typedef enum hoc_analytic_kind {
   HOC_ANALYTIC_FOLD,     /* a square [0,a]^2 that folds along v = b (0 < b < a): phi = (u,
                             w^2, w^3), w = v - b; phi_u x phi_v = (0, -3w^2, 2w) vanishes on
                             the fold and reverses across it (a cuspidal edge) */
-  HOC_ANALYTIC_KINK      /* the square [0,a]^2 of a plane whose u runs four times slower past
+  HOC_ANALYTIC_KINK,     /* the square [0,a]^2 of a plane whose u runs four times slower past
                             u = b (0 < b < a), as at a B-spline knot where the derivative
                             jumps: phi = (g(u), v, 0), g(u) = u below b, b + (u - b) / 4 above;
                             flat, its parametrisation only C0 */
+  HOC_ANALYTIC_STALL     /* the square [0,a]^2 of a plane whose side u = 0 (b long) stalls, as
+                            B-spline control rows that coincide to a file's digits:
+                            phi = (u^2 - d^2 (1 - exp(-u / d)), (b + u^2) v, 0), d = 1e-6 a:
+                            |phi_u| is d there, and phi_u x phi_v, far from 0 next to
+                            |phi_u|^2 + |phi_v|^2, points down in an ear a few d wide (no
+                            element of a mesh resolves it) and up everywhere else */
 } hoc_analytic_kind;
 
 /** One analytic face (tag 1) with its seam/pole curves and vertices, thread-safe. */

@@ -61,6 +61,12 @@ static void face_point(const analytic *s, double u, double v, double *x, double 
     U[0] = 1, U[1] = 0, U[2] = 0;
     V[0] = 0, V[1] = 2 * w, V[2] = 3 * w * w;
   } break;
+  case HOC_ANALYTIC_STALL: {
+    double d = 1e-6 * a, e = exp(-u / d);
+    X[0] = u * u - d * d * (1 - e), X[1] = (b + u * u) * v, X[2] = 0;
+    U[0] = 2 * u - d * e, U[1] = 2 * u * v, U[2] = 0;
+    V[0] = 0, V[1] = b + u * u, V[2] = 0;
+  } break;
   case HOC_ANALYTIC_TORUS:
   default: {
     double r = a + b * cv;
@@ -130,6 +136,11 @@ static void face_inverse(const analytic *s, const double *x, double *uv) {
     uv[0] = x[0];
     uv[1] = s->b + cbrt(x[2]);
     break;
+  case HOC_ANALYTIC_STALL: { /* (the branch past the ear: x = u^2 - d^2 there) */
+    double d = 1e-6 * s->a;
+    uv[0] = sqrt(fmax(x[0] + d * d, 0));
+    uv[1] = x[1] / (s->b + uv[0] * uv[0]);
+  } break;
   case HOC_ANALYTIC_SPHERE:
     uv[0] = rho > 0 ? u : 0;
     uv[1] = atan2(x[2], rho);
@@ -217,6 +228,7 @@ hoc_status hoc_cad_create_analytic(hoc_analytic_kind kind, double a, double b,
   case HOC_ANALYTIC_PLANE: nc = 4, nv = 4; break;
   case HOC_ANALYTIC_FOLD: nc = 4, nv = 4; break;
   case HOC_ANALYTIC_KINK: nc = 4, nv = 4; break;
+  case HOC_ANALYTIC_STALL: nc = 4, nv = 4; break;
   case HOC_ANALYTIC_SPHERE: nc = 3, nv = 2; break;
   case HOC_ANALYTIC_CYLINDER: nc = 3, nv = 2; break;
   case HOC_ANALYTIC_CONE: nc = 3, nv = 2; break;
@@ -243,10 +255,12 @@ hoc_status hoc_cad_create_analytic(hoc_analytic_kind kind, double a, double b,
   case HOC_ANALYTIC_PLANE:
   case HOC_ANALYTIC_FOLD:
   case HOC_ANALYTIC_KINK:
+  case HOC_ANALYTIC_STALL:
     snprintf(f->type, sizeof f->type, "%s",
-             kind == HOC_ANALYTIC_PLANE  ? "Plane"
-             : kind == HOC_ANALYTIC_FOLD ? "Folded square"
-                                         : "Plane with a knot");
+             kind == HOC_ANALYTIC_PLANE   ? "Plane"
+             : kind == HOC_ANALYTIC_FOLD  ? "Folded square"
+             : kind == HOC_ANALYTIC_STALL ? "Plane with a stalled side"
+                                          : "Plane with a knot");
     f->lo[0] = f->lo[1] = 0;
     f->hi[0] = f->hi[1] = a;
     set_curve(m, 0, 0, a, 0, 1, s, 0, 0, 1, 0);  /* v = 0 */
@@ -259,6 +273,10 @@ hoc_status hoc_cad_create_analytic(hoc_analytic_kind kind, double a, double b,
     face_point(s, 0, a, m->vertices[3].xyz, NULL, NULL);
     m->bbox[3] = m->bbox[4] = a;
     if (kind == HOC_ANALYTIC_KINK) m->bbox[3] = b + 0.25 * (a - b);
+    if (kind == HOC_ANALYTIC_STALL) { /* x = u^2 - d u, y = (b + u^2) v */
+      m->bbox[0] = -1e-12 * a * a, m->bbox[3] = a * a;
+      m->bbox[4] = (b + a * a) * a;
+    }
     if (kind == HOC_ANALYTIC_FOLD) { /* x = u, y = w^2, z = w^3 with w in [-b, a - b] */
       m->bbox[4] = fmax(b * b, (a - b) * (a - b));
       m->bbox[2] = -b * b * b, m->bbox[5] = (a - b) * (a - b) * (a - b);

@@ -28,15 +28,16 @@
  * vanishes at the corner (the criterion of the slot normals). */
 static hoc_status corner_normal(const hoc_mesh *m, size_t e, int k, double *n) {
   int f = m->elem_face[e];
+  const hoc_cad_face *face = &m->model->faces[f];
   const double *uv = m->elem_uv + 6 * e;
   double du[3], dv[3];
   HOC_TRY(hoc_cad_face_eval(m->model, f, 1, uv + 2 * k, NULL, du, dv));
   hoc_cross3(du, dv, n);
-  if (!(sqrt(hoc_dot3(n, n)) > 1e-10 * (hoc_dot3(du, du) + hoc_dot3(dv, dv)))) {
+  for (double t = ALONG_ELEMENT; hoc_cad_face_singular(face, du, dv) && t < 0.2; t *= 10) {
     double p[2];
     for (int d = 0; d < 2; ++d) {
       double centroid = (uv[d] + uv[2 + d] + uv[4 + d]) / 3;
-      p[d] = uv[2 * k + d] + ALONG_ELEMENT * (centroid - uv[2 * k + d]);
+      p[d] = uv[2 * k + d] + t * (centroid - uv[2 * k + d]);
     }
     HOC_TRY(hoc_cad_face_eval(m->model, f, 1, p, NULL, du, dv));
     hoc_cross3(du, dv, n);
@@ -71,24 +72,26 @@ hoc_status hoc_mesh_element_folds(const hoc_mesh *mesh, size_t e, int *folds) {
     }
   /* a corner where phi_u x phi_v vanishes: the limit along the element
    * (a fold next to a collapsed side lies between it and the next sample) */
+  const hoc_cad_face *face = &mesh->model->faces[f];
   for (int corner = 0; corner < 3; ++corner) {
     double centroid[2], *p = uv + 2 * at[corner == 1 ? N : 0][corner == 2 ? N : 0];
+    double p0[2] = {p[0], p[1]};
     for (int d = 0; d < 2; ++d)
       centroid[d] = (c[d] + c[2 + d] + c[4 + d]) / 3;
-    double dd[6], m[3];
+    double dd[6];
     HOC_TRY(hoc_cad_face_eval(mesh->model, f, 1, p, NULL, dd, dd + 3));
-    hoc_cross3(dd, dd + 3, m);
-    if (sqrt(hoc_dot3(m, m)) > 1e-10 * (hoc_dot3(dd, dd) + hoc_dot3(dd + 3, dd + 3))) continue;
-    for (int d = 0; d < 2; ++d)
-      p[d] += ALONG_ELEMENT * (centroid[d] - p[d]);
+    for (double t = ALONG_ELEMENT; hoc_cad_face_singular(face, dd, dd + 3) && t < 0.2; t *= 10) {
+      for (int d = 0; d < 2; ++d)
+        p[d] = p0[d] + t * (centroid[d] - p0[d]);
+      HOC_TRY(hoc_cad_face_eval(mesh->model, f, 1, p, NULL, dd, dd + 3));
+    }
   }
   HOC_TRY(hoc_cad_face_eval(mesh->model, f, POINTS, uv, NULL, du, dv));
   for (k = 0; k < POINTS; ++k) {
     hoc_cross3(du + 3 * k, dv + 3 * k, n + 3 * k);
-    /* where phi_u x phi_v vanishes (a pole, a collapsed side) its sign
-     * is rounding: no sample */
-    regular[k] = sqrt(hoc_dot3(n + 3 * k, n + 3 * k)) >
-                 1e-10 * (hoc_dot3(du + 3 * k, du + 3 * k) + hoc_dot3(dv + 3 * k, dv + 3 * k));
+    /* where phi_u x phi_v vanishes (a pole, a collapsed or stalled side)
+     * its sign is rounding: no sample */
+    regular[k] = !hoc_cad_face_singular(face, du + 3 * k, dv + 3 * k);
   }
   *folds = 0;
   for (int i = 0; i <= N && !*folds; ++i)

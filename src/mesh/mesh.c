@@ -1,5 +1,6 @@
 /* hoc_mesh: allocation, accessors, positions and normals from parameters.
  * SPDX-License-Identifier: GPL-2.0-or-later */
+#include "core/geometry.h"
 #include "mesh/mesh.h"
 
 #include <math.h>
@@ -400,25 +401,27 @@ static void pole_inside(const hoc_cad_face *f, const double *uv, unsigned char p
 }
 
 /* Unit normal (oriented as the mesh) of face f at uv, from its derivatives
- * du, dv there; at a singular point not flagged as a pole, look just
- * inside the face. */
+ * du, dv there; at a singular point not flagged as a pole (or a side where
+ * a derivative stalls), look just inside the face, farther in until the
+ * face is regular there. */
 static hoc_status slot_normal(const hoc_model *model, int f, const double *uv, const double *a,
                               const double *b, double sign, double *normal) {
+  const hoc_cad_face *face = &model->faces[f];
   double c[3];
-  c[0] = a[1] * b[2] - a[2] * b[1];
-  c[1] = a[2] * b[0] - a[0] * b[2];
-  c[2] = a[0] * b[1] - a[1] * b[0];
-  double len = sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
-  double scale = a[0] * a[0] + a[1] * a[1] + a[2] * a[2] + b[0] * b[0] + b[1] * b[1] + b[2] * b[2];
-  if (!(len > 1e-10 * scale)) {
+  hoc_cross3(a, b, c);
+  if (hoc_cad_face_singular(face, a, b)) {
     double p[2], a2[3], b2[3];
-    nudge_inside(&model->faces[f], uv, p);
-    HOC_TRY(hoc_cad_face_eval(model, f, 1, p, NULL, a2, b2));
-    c[0] = a2[1] * b2[2] - a2[2] * b2[1];
-    c[1] = a2[2] * b2[0] - a2[0] * b2[2];
-    c[2] = a2[0] * b2[1] - a2[1] * b2[0];
-    len = sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+    for (double step = 1e-5; step <= 1.01e-2; step *= 10) {
+      for (int d = 0; d < 2; ++d) {
+        double mid = 0.5 * (face->lo[d] + face->hi[d]), range = face->hi[d] - face->lo[d];
+        p[d] = uv[d] + step * range * (mid > uv[d] ? 1.0 : (mid < uv[d] ? -1.0 : 0.0));
+      }
+      HOC_TRY(hoc_cad_face_eval(model, f, 1, p, NULL, a2, b2));
+      hoc_cross3(a2, b2, c);
+      if (!hoc_cad_face_singular(face, a2, b2)) break;
+    }
   }
+  double len = sqrt(hoc_dot3(c, c));
   double inv = len > 0 ? sign / len : 0.0;
   for (int d = 0; d < 3; ++d)
     normal[d] = c[d] * inv;
