@@ -18,8 +18,7 @@
  * returned when out of memory). */
 static uint32_t *narrow(hoc_growlist *g) {
   uint32_t *w = hoc_realloc(NULL, g->n ? g->n : 1, sizeof *w);
-  for (size_t i = 0; w && i < g->n; ++i)
-    w[i] = (uint32_t)g->v[i];
+  for (size_t i = 0; w && i < g->n; ++i) w[i] = (uint32_t)g->v[i];
   free(g->v);
   g->v = NULL;
   return w;
@@ -47,8 +46,7 @@ hoc_status hoc_opt_build_blocks(hoc_opt *o, int family) {
   int p = m->order;
   HOC_ALLOC(B->node_block, nn);
   if (family == 0) HOC_ALLOC(B->node_off, nn); /* (single nodes: offset 0) */
-  for (size_t i = 0; i < nn; ++i)
-    B->node_block[i] = HOC_OPT_NO_BLOCK;
+  for (size_t i = 0; i < nn; ++i) B->node_block[i] = HOC_OPT_NO_BLOCK;
   hoc_growlist start = {0}, nodes = {0};
   hoc_status status = HOC_OK;
   /* vertex blocks first, then edge blocks, then interior blocks */
@@ -147,8 +145,7 @@ hoc_status hoc_opt_build_blocks(hoc_opt *o, int family) {
         for (size_t c = o->adj.ne_start[i]; c < o->adj.ne_start[i + 1] && status == HOC_OK; ++c) {
           size_t e = o->adj.ne_elem[c];
           int seen = 0;
-          for (size_t d = fs.v[b]; d < fe.n && !seen; ++d)
-            seen = fe.v[d] == e;
+          for (size_t d = fs.v[b]; d < fe.n && !seen; ++d) seen = fe.v[d] == e;
           if (!seen) status = hoc_grow_push(&fe, e);
         }
       }
@@ -227,8 +224,7 @@ hoc_status hoc_opt_build_blocks(hoc_opt *o, int family) {
       status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
       goto done;
     }
-    for (size_t b = 0; b < nb; ++b)
-      color[b] = -1;
+    for (size_t b = 0; b < nb; ++b) color[b] = -1;
     for (size_t b = 0; b < nb && status == HOC_OK; ++b) {
       for (size_t a = hoc_opt_be_begin(B, b); a < hoc_opt_be_end(B, b); ++a) {
         const size_t *cn = m->conn + B->be_elem[a] * np;
@@ -238,8 +234,7 @@ hoc_status hoc_opt_build_blocks(hoc_opt *o, int family) {
         }
       }
       int c = 0;
-      while ((size_t)c < cap && stamp[c] == b + 1)
-        ++c;
+      while ((size_t)c < cap && stamp[c] == b + 1) ++c;
       if ((size_t)c >= cap) {
         size_t *s2 = hoc_realloc(stamp, 2 * cap, sizeof *s2);
         if (!s2) {
@@ -259,11 +254,9 @@ hoc_status hoc_opt_build_blocks(hoc_opt *o, int family) {
     if (status == HOC_OK && (!B->color_start || !B->color_block))
       status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
     if (status == HOC_OK) {
-      for (size_t b = 0; b < nb; ++b)
-        B->color_start[color[b] + 1]++;
+      for (size_t b = 0; b < nb; ++b) B->color_start[color[b] + 1]++;
       hoc_opt_csr_finish_counts((size_t)max_colors, B->color_start);
-      for (size_t b = 0; b < nb; ++b)
-        B->color_block[B->color_start[color[b]]++] = (uint32_t)b;
+      for (size_t b = 0; b < nb; ++b) B->color_block[B->color_start[color[b]]++] = (uint32_t)b;
       hoc_opt_csr_restore((size_t)max_colors, B->color_start);
       B->cpos = hoc_calloc(nb + 1, sizeof *B->cpos);
       B->cbd = hoc_calloc(nb + 1, sizeof *B->cbd);
@@ -277,8 +270,7 @@ hoc_status hoc_opt_build_blocks(hoc_opt *o, int family) {
         B->cbd[b] = (uint32_t)nd;
         nd += B->bd_start[b + 1] - B->bd_start[b];
       }
-      if (B->color_start[c + 1] - first > B->max_color)
-        B->max_color = B->color_start[c + 1] - first;
+      if (B->color_start[c + 1] - first > B->max_color) B->max_color = B->color_start[c + 1] - first;
       if (nd > B->max_color_nd) B->max_color_nd = nd;
     }
     if (status == HOC_OK && max_colors > UINT16_MAX)
@@ -357,8 +349,7 @@ void hoc_opt_wake_all(hoc_opt *o) {
 
 /* Flags the nodes within HOC_OPT_NEAR_RINGS rings of a tangled element. */
 void hoc_opt_mark_near(hoc_opt *o) {
-  for (size_t e = 0; e < o->m->n_elems; ++e)
-    o->el.near_e[e] = !o->el.valid[e];
+  for (size_t e = 0; e < o->m->n_elems; ++e) o->el.near_e[e] = !o->el.valid[e];
   hoc_opt_grow_rings(o->m, o->el.near_e, o->node.near, HOC_OPT_NEAR_RINGS);
 }
 

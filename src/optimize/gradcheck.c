@@ -18,8 +18,7 @@ static hoc_status block_f_at(hoc_opt *o, size_t b, int dof, double h, hoc_opt_sc
                              double *f) {
   double *st = hoc_opt_step_of(o, b);
   int nd = (int)(o->B->bd_start[b + 1] - o->B->bd_start[b]);
-  for (int c = 0; c < nd; ++c)
-    st[c] = c == dof ? h : 0;
+  for (int c = 0; c < nd; ++c) st[c] = c == dof ? h : 0;
   o->trial.alpha[hoc_opt_tb(o, b)] = 1;
   size_t n = 0;
   size_t nlist = hoc_opt_bn_end(o->B, b) - hoc_opt_bn_begin(o->B, b) + hoc_opt_carry_end(o->B, b) -
@@ -43,15 +42,14 @@ static hoc_status block_f_at(hoc_opt *o, size_t b, int dof, double h, hoc_opt_sc
     size_t e = o->B->be_elem[a];
     hoc_opt_gather(o, e, s->x, s->n);
     int nr = hoc_opt_elem_residuals(o, e, s->x, s->n, NULL, NULL, s->r, NULL, NULL);
-    for (int q = 0; q < nr; ++q)
-      *f += s->r[q] * s->r[q];
+    for (int q = 0; q < nr; ++q) *f += s->r[q] * s->r[q];
   }
   hoc_opt_set_moving(o, b, 0);
   return HOC_OK;
 }
 
-hoc_status hoc_mesh_check_gradient(hoc_mesh *mesh, hoc_measure measure, int fix_curves, int samples,
-                                   double *max_rel_error) {
+hoc_status hoc_mesh_check_gradient(hoc_mesh *mesh, hoc_measure measure, int fix_curves,
+                                   int samples, double *max_rel_error) {
   HOC_CHECK(mesh && max_rel_error, HOC_ERR_ARGUMENT, "NULL argument");
   HOC_CHECK(samples > 0, HOC_ERR_ARGUMENT, "need at least one sample");
   hoc_opt ctx = {0};

@@ -313,7 +313,9 @@ static inline size_t hoc_opt_carry_end(const hoc_opt_blockset *B, size_t b) {
 }
 
 /* Block b's (of o->B) place in the trial's per-block arrays, and its step. */
-static inline size_t hoc_opt_tb(const hoc_opt *o, size_t b) { return o->B->cpos[b]; }
+static inline size_t hoc_opt_tb(const hoc_opt *o, size_t b) {
+  return o->B->cpos[b];
+}
 static inline double *hoc_opt_step_of(const hoc_opt *o, size_t b) {
   return o->trial.step + o->B->cbd[b];
 }
@@ -426,8 +428,7 @@ static inline double *hoc_opt_tdz(const hoc_opt *o, size_t k) {
  * a curve node one per face around it). */
 static inline size_t hoc_opt_tslot(const hoc_opt *o, size_t k, size_t s) {
   size_t j = o->adj.ns_start[k];
-  while (o->adj.ns_slot[j] != s)
-    ++j;
+  while (o->adj.ns_slot[j] != s) ++j;
   return o->trial.tsbase[o->trial.tix[k]] + (j - o->adj.ns_start[k]);
 }
 

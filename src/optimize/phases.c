@@ -174,8 +174,7 @@ static hoc_status sweep(run *r, size_t *moved) {
   /* nodes near tangled elements and nodes of poor elements (those that set
    * the mesh's worst quality) never sleep */
   double qmean = 0;
-  for (size_t e = 0; e < mesh->n_elems; ++e)
-    qmean += o->el.qe[e];
+  for (size_t e = 0; e < mesh->n_elems; ++e) qmean += o->el.qe[e];
   qmean /= (double)(mesh->n_elems ? mesh->n_elems : 1);
   for (size_t e = 0; e < mesh->n_elems; ++e)
     if (o->el.region[e] || o->el.qe[e] < HOC_OPT_POOR_Q_SHARE * qmean) wake_element(r, e);
@@ -280,14 +279,14 @@ static hoc_status run_sweeps(run *r, int *used_up) {
     HOC_TRY(hoc_opt_sweep_start(o, &r->f, &r->qmin, &r->tangled));
     HOC_TRY(after_sweep(r, tangled_before));
     if (r->opts.progress) {
-      hoc_optimize_iteration info = {
-          r->it, r->f, r->qmin, r->tangled, moved, hoc_opt_now() - r->t0, 1 + r->second};
+      hoc_optimize_iteration info = {r->it,  r->f,  r->qmin,
+                                     r->tangled, moved, hoc_opt_now() - r->t0,
+                                     1 + r->second};
       if (r->opts.progress(r->opts.progress_user, &info))
         return HOC_ERROR(HOC_ERR_INTERRUPTED, "optimisation interrupted");
     }
     size_t active = 0;
-    for (size_t i = 0; i < r->mesh->n_nodes; ++i)
-      active += o->node.active[i];
+    for (size_t i = 0; i < r->mesh->n_nodes; ++i) active += o->node.active[i];
     if (!active || !moved) {
       r->res.converged = r->settled = r->tangled == 0;
       if (r->tangled && !o->cfg.relax_uv && !o->adj.touched) {
@@ -431,8 +430,8 @@ hoc_status hoc_opt_run_rules(hoc_mesh *mesh, const hoc_optimize_options *options
   if (options) opts = *options;
   if (opts.max_iterations <= 0) opts.max_iterations = HOC_OPT_DEFAULT_MAX_ITERATIONS;
   if (!(opts.tolerance > 0)) opts.tolerance = HOC_OPT_DEFAULT_TOLERANCE;
-  HOC_CHECK(opts.measure == HOC_MEASURE_SHAPE || opts.measure == HOC_MEASURE_ODDY, HOC_ERR_ARGUMENT,
-            "unknown distortion measure %d", (int)opts.measure);
+  HOC_CHECK(opts.measure == HOC_MEASURE_SHAPE || opts.measure == HOC_MEASURE_ODDY,
+            HOC_ERR_ARGUMENT, "unknown distortion measure %d", (int)opts.measure);
   HOC_CHECK(opts.max_iterations <= HOC_OPT_MAX_ITERATIONS_LIMIT, HOC_ERR_ARGUMENT,
             "too many iterations requested");
   HOC_CHECK(isfinite(opts.tolerance), HOC_ERR_ARGUMENT, "tolerance must be a finite number");
@@ -441,10 +440,8 @@ hoc_status hoc_opt_run_rules(hoc_mesh *mesh, const hoc_optimize_options *options
   HOC_CHECK(r, HOC_ERR_MEMORY, "out of memory");
   r->mesh = mesh;
   r->opts = opts;
-  if (rules)
-    r->rules = *rules;
-  else
-    hoc_opt_rules_default(&r->rules);
+  if (rules) r->rules = *rules;
+  else hoc_opt_rules_default(&r->rules);
   r->nthreads = omp_get_max_threads();
   r->it0 = it0;
   r->t0 = t0;
@@ -454,8 +451,8 @@ hoc_status hoc_opt_run_rules(hoc_mesh *mesh, const hoc_optimize_options *options
   hoc_status status = hoc_mesh_update_xyz(mesh);
   if (status == HOC_OK) mesh->off_cad = 0;
   if (status == HOC_OK)
-    status =
-        hoc_opt_setup(o, mesh, opts.measure, opts.fix_curves, opts.free_elements, opts.free_rings);
+    status = hoc_opt_setup(o, mesh, opts.measure, opts.fix_curves, opts.free_elements,
+                           opts.free_rings);
   if (status == HOC_OK && r->rules.frame_pool_bytes != HOC_OPT_FRAME_POOL_BYTES)
     status = hoc_opt_frames_setup(o, r->rules.frame_pool_bytes);
   o->cfg.protect = protect; /* (setup clears the state) */

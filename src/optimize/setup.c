@@ -33,11 +33,10 @@ void hoc_opt_free(hoc_opt *o) {
       o->adj.elem_h,      o->node.active,  o->node.moving,  o->trial.step,      o->trial.alpha,
       o->trial.f0,        o->trial.fnew,   o->trial.slope,  o->trial.state,     o->trial.list,
       o->trial.committed, o->trial.tpar,   o->trial.txyz,   o->trial.tdz,       o->trial.tslot_uv,
-      o->trial.tnormal,   o->trial.tix,    o->trial.tsbase, o->el.xvalid,       o->node.near,
-      o->el.near_e,       o->adj.touched,  o->el.has_fold,  o->el.fold_rs,      o->el.fragile,
-      o->fc.slot,         o->fc.pool,      o->fc.owner,     o->fc.fresh,        o->fc.want};
-  for (size_t i = 0; i < sizeof p / sizeof *p; ++i)
-    free(p[i]);
+      o->trial.tnormal,   o->trial.tix,    o->trial.tsbase, o->el.xvalid,    o->node.near,    o->el.near_e,       o->adj.touched,
+      o->el.has_fold,     o->el.fold_rs,   o->el.fragile,   o->fc.slot,         o->fc.pool,
+      o->fc.owner,        o->fc.fresh,     o->fc.want};
+  for (size_t i = 0; i < sizeof p / sizeof *p; ++i) free(p[i]);
 }
 
 /* CSR from (key, value) pairs produced by a callback-free double pass. */
@@ -49,13 +48,11 @@ hoc_status hoc_opt_csr_alloc(size_t n, size_t total, size_t **start, size_t **it
 }
 
 void hoc_opt_csr_finish_counts(size_t n, size_t *start) {
-  for (size_t i = 0; i < n; ++i)
-    start[i + 1] += start[i];
+  for (size_t i = 0; i < n; ++i) start[i + 1] += start[i];
 }
 
 void hoc_opt_csr_restore(size_t n, size_t *start) {
-  for (size_t i = n; i > 0; --i)
-    start[i] = start[i - 1];
+  for (size_t i = n; i > 0; --i) start[i] = start[i - 1];
   start[0] = 0;
 }
 
@@ -67,12 +64,10 @@ void hoc_opt_grow_rings(const hoc_mesh *m, unsigned char *elem, unsigned char *n
   for (int r = 0;; ++r) {
     for (size_t e = 0; e < ne; ++e)
       if (elem[e])
-        for (size_t k = 0; k < np; ++k)
-          node[m->conn[e * np + k]] = 1;
+        for (size_t k = 0; k < np; ++k) node[m->conn[e * np + k]] = 1;
     if (r >= rings) break;
     for (size_t e = 0; e < ne; ++e)
-      for (size_t k = 0; k < np && !elem[e]; ++k)
-        elem[e] = node[m->conn[e * np + k]];
+      for (size_t k = 0; k < np && !elem[e]; ++k) elem[e] = node[m->conn[e * np + k]];
   }
 }
 
@@ -93,8 +88,7 @@ static hoc_status restrict_free(hoc_opt *o, const unsigned char *flagged, int ri
     if (!node[i]) o->adj.ndof[i] = 0;
   memset(elem, 0, ne);
   for (size_t e = 0; e < ne; ++e)
-    for (size_t k = 0; k < np && !elem[e]; ++k)
-      elem[e] = o->adj.ndof[m->conn[e * np + k]] > 0;
+    for (size_t k = 0; k < np && !elem[e]; ++k) elem[e] = o->adj.ndof[m->conn[e * np + k]] > 0;
   o->adj.touched = elem;
   free(node);
   return HOC_OK;
@@ -106,10 +100,8 @@ static hoc_status narrow_csr(size_t n, size_t total, size_t **start, size_t **it
                              uint32_t **start32, uint32_t **items32) {
   *start32 = hoc_realloc(NULL, n + 1, sizeof **start32);
   *items32 = hoc_realloc(NULL, total + 1, sizeof **items32);
-  for (size_t i = 0; *start32 && i <= n; ++i)
-    (*start32)[i] = (uint32_t)(*start)[i];
-  for (size_t i = 0; *items32 && i < total; ++i)
-    (*items32)[i] = (uint32_t)(*items)[i];
+  for (size_t i = 0; *start32 && i <= n; ++i) (*start32)[i] = (uint32_t)(*start)[i];
+  for (size_t i = 0; *items32 && i < total; ++i) (*items32)[i] = (uint32_t)(*items)[i];
   free(*start);
   free(*items);
   *start = *items = NULL;
@@ -144,14 +136,14 @@ hoc_status hoc_opt_setup(hoc_opt *o, hoc_mesh *m, hoc_measure measure, int fix_c
    * 32-bit: a block list has at most 3 entries per node of an element) */
   HOC_CHECK(nn < UINT32_MAX / 2 && ne * np < UINT32_MAX / 4 && m->n_slots < UINT32_MAX / 4 &&
                 m->n_lines * ((size_t)m->order + 1) < UINT32_MAX / 4,
-            HOC_ERR_ARGUMENT, "mesh too large for the optimiser (%zu nodes, %zu elements)", nn, ne);
+            HOC_ERR_ARGUMENT,
+            "mesh too large for the optimiser (%zu nodes, %zu elements)", nn, ne);
   HOC_ALLOC(o->adj.ndof, nn);
   HOC_ALLOC(o->adj.ne_local, ne * np + 1);
   size_t *start = NULL, *items = NULL;
   HOC_TRY(csr_alloc_local(nn, ne * np, &start, &items));
   for (size_t e = 0; e < ne; ++e)
-    for (size_t k = 0; k < np; ++k)
-      start[m->conn[e * np + k] + 1]++;
+    for (size_t k = 0; k < np; ++k) start[m->conn[e * np + k] + 1]++;
   hoc_opt_csr_finish_counts(nn, start);
   for (size_t e = 0; e < ne; ++e)
     for (size_t k = 0; k < np; ++k) {
@@ -162,28 +154,23 @@ hoc_status hoc_opt_setup(hoc_opt *o, hoc_mesh *m, hoc_measure measure, int fix_c
   hoc_opt_csr_restore(nn, start);
   HOC_TRY(narrow_csr(nn, ne * np, &start, &items, &o->adj.ne_start, &o->adj.ne_elem));
   HOC_TRY(csr_alloc_local(nn, m->n_slots, &start, &items));
-  for (size_t s = 0; s < m->n_slots; ++s)
-    start[m->slot_node[s] + 1]++;
+  for (size_t s = 0; s < m->n_slots; ++s) start[m->slot_node[s] + 1]++;
   hoc_opt_csr_finish_counts(nn, start);
-  for (size_t s = 0; s < m->n_slots; ++s)
-    items[start[m->slot_node[s]]++] = s;
+  for (size_t s = 0; s < m->n_slots; ++s) items[start[m->slot_node[s]]++] = s;
   hoc_opt_csr_restore(nn, start);
   HOC_TRY(narrow_csr(nn, m->n_slots, &start, &items, &o->adj.ns_start, &o->adj.ns_slot));
   size_t lp = (size_t)m->order + 1;
   HOC_TRY(csr_alloc_local(nn, m->n_lines * lp, &start, &items));
   for (size_t l = 0; l < m->n_lines; ++l)
-    for (size_t k = 0; k < lp; ++k)
-      start[m->line_conn[l * lp + k] + 1]++;
+    for (size_t k = 0; k < lp; ++k) start[m->line_conn[l * lp + k] + 1]++;
   hoc_opt_csr_finish_counts(nn, start);
   for (size_t l = 0; l < m->n_lines; ++l)
-    for (size_t k = 0; k < lp; ++k)
-      items[start[m->line_conn[l * lp + k]]++] = l;
+    for (size_t k = 0; k < lp; ++k) items[start[m->line_conn[l * lp + k]]++] = l;
   hoc_opt_csr_restore(nn, start);
   HOC_TRY(narrow_csr(nn, m->n_lines * lp, &start, &items, &o->adj.nl_start, &o->adj.nl_line));
   for (size_t i = 0; i < nn; ++i) {
     if (o->adj.ne_start[i + 1] == o->adj.ne_start[i]) continue; /* used by no element */
-    if (m->dim[i] == HOC_ON_FACE)
-      o->adj.ndof[i] = 2;
+    if (m->dim[i] == HOC_ON_FACE) o->adj.ndof[i] = 2;
     else if (m->dim[i] == HOC_ON_CURVE && !fix_curves && !m->model->curves[m->entity[i]].degenerate)
       o->adj.ndof[i] = 1;
   }

@@ -42,8 +42,8 @@ void hoc_opt_block_model(const hoc_opt *o, size_t b, hoc_opt_scratch *s, double 
       }
     }
     hoc_opt_gather(o, e, s->x, s->n);
-    int nr =
-        hoc_opt_elem_residuals(o, e, s->x, s->n, hoc_opt_frames_of(o, e), s->nd, s->r, s->J, NULL);
+    int nr = hoc_opt_elem_residuals(o, e, s->x, s->n, hoc_opt_frames_of(o, e), s->nd, s->r, s->J,
+                                    NULL);
     double *Jz = s->Jz; /* [nr][nd] */
     memset(Jz, 0, (size_t)nr * (size_t)nd * sizeof *Jz);
     for (int i = 0; i < np; ++i) {
@@ -64,22 +64,19 @@ void hoc_opt_block_model(const hoc_opt *o, size_t b, hoc_opt_scratch *s, double 
       *f += r * r;
       for (int c = 0; c < nd; ++c) {
         g[c] += 2 * r * jz[c];
-        for (int d = 0; d <= c; ++d)
-          H[c * nd + d] += 2 * jz[c] * jz[d];
+        for (int d = 0; d <= c; ++d) H[c * nd + d] += 2 * jz[c] * jz[d];
       }
     }
   }
   for (int c = 0; c < nd; ++c)
-    for (int d = c + 1; d < nd; ++d)
-      H[c * nd + d] = H[d * nd + c];
+    for (int d = c + 1; d < nd; ++d) H[c * nd + d] = H[d * nd + c];
 }
 
 /* Solve (H + mu diag(H)) x = -g by Cholesky, raising mu until it works.
  * L: [nd][nd] scratch. Returns 0 if no step could be found. */
 static int damped_solve(int nd, const double *H, const double *g, double *L, double *x) {
   double dmax = 0;
-  for (int c = 0; c < nd; ++c)
-    dmax = fmax(dmax, H[c * nd + c]);
+  for (int c = 0; c < nd; ++c) dmax = fmax(dmax, H[c * nd + c]);
   if (!(dmax > 0)) return 0;
   for (double mu = HOC_OPT_MU_FIRST; mu < HOC_OPT_MU_LAST; mu *= HOC_OPT_MU_GROWTH) {
     int ok = 1;
@@ -87,8 +84,7 @@ static int damped_solve(int nd, const double *H, const double *g, double *L, dou
       for (int d = 0; d <= c; ++d) {
         double v = H[c * nd + d];
         if (c == d) v += mu * fmax(H[c * nd + c], HOC_OPT_DIAG_FLOOR * dmax);
-        for (int k = 0; k < d; ++k)
-          v -= L[c * nd + k] * L[d * nd + k];
+        for (int k = 0; k < d; ++k) v -= L[c * nd + k] * L[d * nd + k];
         if (c == d) {
           if (!(v > 0)) {
             ok = 0;
@@ -102,14 +98,12 @@ static int damped_solve(int nd, const double *H, const double *g, double *L, dou
     if (!ok) continue;
     for (int c = 0; c < nd; ++c) { /* L y = -g */
       double v = -g[c];
-      for (int k = 0; k < c; ++k)
-        v -= L[c * nd + k] * x[k];
+      for (int k = 0; k < c; ++k) v -= L[c * nd + k] * x[k];
       x[c] = v / L[c * nd + c];
     }
     for (int c = nd - 1; c >= 0; --c) { /* L^T x = y */
       double v = x[c];
-      for (int k = c + 1; k < nd; ++k)
-        v -= L[k * nd + c] * x[k];
+      for (int k = c + 1; k < nd; ++k) v -= L[k * nd + c] * x[k];
       x[c] = v / L[c * nd + c];
     }
     return 1;
@@ -171,8 +165,7 @@ static int block_trial_flagged(const hoc_opt *o, size_t b, hoc_opt_scratch *s, d
     double smin;
     int nr = hoc_opt_elem_residuals(o, e, s->x, s->n, fr, NULL, s->r, NULL, &smin);
     if (o->el.valid[e] && !relaxed(o, e) && !(smin > 0)) return 0;
-    for (int q = 0; q < nr; ++q)
-      *f += s->r[q] * s->r[q];
+    for (int q = 0; q < nr; ++q) *f += s->r[q] * s->r[q];
   }
   if (!isfinite(*f) || !(*f <= fmax)) return 0;
   /* a candidate: the dense part of the tangle test (nodes, validation
@@ -298,8 +291,7 @@ static hoc_status line_search(hoc_opt *o, size_t *list, size_t nt, size_t n_eval
     }
     nt = keep;
   }
-  for (size_t a = 0; a < nt; ++a)
-    o->trial.state[hoc_opt_tb(o, list[a])] = 0; /* gave up: asleep */
+  for (size_t a = 0; a < nt; ++a) o->trial.state[hoc_opt_tb(o, list[a])] = 0; /* gave up: asleep */
 end:
   free(elist);
   return status;
@@ -328,8 +320,7 @@ hoc_status hoc_opt_do_color(hoc_opt *o, int color, hoc_opt_scratch *scr, int nth
     double *st = hoc_opt_step_of(o, b);
     if (!damped_solve(nd, s->H, s->g, s->L, st)) continue;
     double slope = 0;
-    for (int c = 0; c < nd; ++c)
-      slope += s->g[c] * st[c];
+    for (int c = 0; c < nd; ++c) slope += s->g[c] * st[c];
     /* limit every node's displacement to a quarter of its local size */
     double alpha = 1, len_max = 0;
     for (size_t c = hoc_opt_bn_begin(o->B, b); c < hoc_opt_bn_end(o->B, b); ++c) {

@@ -20,8 +20,8 @@ static hoc_status face_normal(const hoc_opt *o, int f, const double *uv, const d
   double c[3], a[3], b[3];
   hoc_opt_cross(du, dv, c);
   double len = sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
-  double scale =
-      du[0] * du[0] + du[1] * du[1] + du[2] * du[2] + dv[0] * dv[0] + dv[1] * dv[1] + dv[2] * dv[2];
+  double scale = du[0] * du[0] + du[1] * du[1] + du[2] * du[2] + dv[0] * dv[0] +
+                 dv[1] * dv[1] + dv[2] * dv[2];
   if (!(len > HOC_OPT_SINGULAR_NORMAL * scale)) {
     const hoc_cad_face *face = &o->model->faces[f];
     double p[2];
@@ -35,8 +35,7 @@ static hoc_status face_normal(const hoc_opt *o, int f, const double *uv, const d
     len = sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
   }
   double s = (o->m->face_orient[f] < 0 ? -1.0 : 1.0) / (len > 0 ? len : 1.0);
-  for (int k = 0; k < 3; ++k)
-    n[k] = s * c[k];
+  for (int k = 0; k < 3; ++k) n[k] = s * c[k];
   return HOC_OK;
 }
 
