@@ -23,34 +23,32 @@ static size_t entry_size(const hoc_opt *o, size_t k) {
          2 * (size_t)(o->adj.nl_start[k + 1] - o->adj.nl_start[k]);
 }
 
+/* A pair of the mesh's numbers into v (to_mesh = 0) or back. */
+static void move2(double *pair, double *v, int to_mesh) {
+  if (to_mesh) memcpy(pair, v, 2 * sizeof *v);
+  else memcpy(v, pair, 2 * sizeof *v);
+}
+
 /* Copies node k's state into v (to_mesh = 0) or v into node k's state
  * (to_mesh = 1); a line end's entry is (end, t) for the ends that are k. */
 static void transfer(hoc_opt *o, size_t k, double *v, int to_mesh) {
   hoc_mesh *m = o->m;
   size_t np = (size_t)o->np, lp = (size_t)m->order + 1;
-  double *at[2];
-  size_t w = 0;
-#define HOC_MOVE2(p)                                                                               \
-  do {                                                                                             \
-    at[0] = (p);                                                                                   \
-    memcpy(to_mesh ? at[0] : v + w, to_mesh ? v + w : at[0], 2 * sizeof(double));                  \
-    w += 2;                                                                                        \
-  } while (0)
-  HOC_MOVE2(m->param + 2 * k);
-  for (size_t j = o->adj.ns_start[k]; j < o->adj.ns_start[k + 1]; ++j)
-    HOC_MOVE2(m->slot_uv + 2 * (size_t)o->adj.ns_slot[j]);
-  for (size_t a = o->adj.ne_start[k]; a < o->adj.ne_start[k + 1]; ++a)
-    HOC_MOVE2(m->elem_uv + 2 * ((size_t)o->adj.ne_elem[a] * np + o->adj.ne_local[a]));
-#undef HOC_MOVE2
-  for (size_t a = o->adj.nl_start[k]; a < o->adj.nl_start[k + 1]; ++a, w += 2) {
+  move2(m->param + 2 * k, v, to_mesh);
+  v += 2;
+  for (size_t j = o->adj.ns_start[k]; j < o->adj.ns_start[k + 1]; ++j, v += 2)
+    move2(m->slot_uv + 2 * (size_t)o->adj.ns_slot[j], v, to_mesh);
+  for (size_t a = o->adj.ne_start[k]; a < o->adj.ne_start[k + 1]; ++a, v += 2)
+    move2(m->elem_uv + 2 * ((size_t)o->adj.ne_elem[a] * np + o->adj.ne_local[a]), v, to_mesh);
+  for (size_t a = o->adj.nl_start[k]; a < o->adj.nl_start[k + 1]; ++a, v += 2) {
     size_t l = o->adj.nl_line[a];
     const size_t *ln = m->line_conn + l * lp;
     if (!to_mesh) {
       int end = ln[0] == k ? 0 : ln[1] == k ? 1 : -1;
-      v[w] = end;
-      v[w + 1] = end >= 0 ? m->line_t[2 * l + (size_t)end] : 0;
-    } else if (v[w] >= 0) {
-      m->line_t[2 * l + (size_t)v[w]] = v[w + 1];
+      v[0] = end;
+      v[1] = end >= 0 ? m->line_t[2 * l + (size_t)end] : 0;
+    } else if (v[0] >= 0) {
+      m->line_t[2 * l + (size_t)v[0]] = v[1];
     }
   }
 }
@@ -104,6 +102,9 @@ static hoc_status freeze(hoc_opt *o, hoc_opt_journal *j) {
 }
 
 hoc_status hoc_opt_journal_take(hoc_opt *o, hoc_opt_journal *j, size_t tangled, double f) {
+  if (!o->journal_entry_max)
+    for (size_t k = 0; k < o->m->n_nodes; ++k)
+      if (entry_size(o, k) > o->journal_entry_max) o->journal_entry_max = entry_size(o, k);
   if (!j->saved) {
     j->saved = hoc_calloc(o->m->n_nodes + 1, 1);
     HOC_CHECK(j->saved, HOC_ERR_MEMORY, "out of memory for the best mesh reached");

@@ -226,7 +226,8 @@ typedef struct hoc_opt {
   hoc_opt_trial trial;
   hoc_opt_frames fc;
   struct hoc_opt_journal *journal[HOC_OPT_JOURNALS]; /* the saved states that log moves */
-  size_t journal_entry_max; /* doubles of the largest node entry of a journal */
+  size_t journal_entry_max; /* doubles of the largest node entry of a journal (0: not yet
+                               known) */
 } hoc_opt;
 
 typedef struct hoc_opt_scratch {

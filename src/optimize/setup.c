@@ -230,12 +230,6 @@ hoc_status hoc_opt_setup(hoc_opt *o, hoc_mesh *m, hoc_measure measure, int fix_c
       h = fmax(h, hoc_dist3(m->xyz + 3 * cn[k], m->xyz + 3 * cn[(k + 1) % 3]));
     o->adj.elem_h[e] = h;
   }
-  for (size_t k = 0; k < nn; ++k) {
-    size_t w =
-        2 + 2 * (size_t)(o->adj.ns_start[k + 1] - o->adj.ns_start[k] + o->adj.ne_start[k + 1] -
-                         o->adj.ne_start[k] + o->adj.nl_start[k + 1] - o->adj.nl_start[k]);
-    if (w > o->journal_entry_max) o->journal_entry_max = w;
-  }
   for (int f = 0; f < 2; ++f)
     for (size_t b = 0; b < o->fam[f].n_blocks; ++b) {
       size_t foot = hoc_opt_be_end(&o->fam[f], b) - hoc_opt_be_begin(&o->fam[f], b);
