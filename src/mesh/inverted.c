@@ -23,25 +23,35 @@
  * for phi_u x phi_v to be well above rounding. */
 #define ALONG_ELEMENT 1e-4
 
+/* Corner k of a triangle with corners c[0..5] in face f's parameters,
+ * moved toward its centroid (ALONG_ELEMENT of the way, then ten times
+ * farther each time, to a fifth) while the face is singular there
+ * (hoc_cad_face_singular): *p and the derivatives du, dv at it, the limit
+ * along the element where phi_u x phi_v vanishes or is rounding. */
+static hoc_status regular_toward_centroid(const hoc_mesh *m, int f, const double *c, int k,
+                                          double *p, double *du, double *dv) {
+  const hoc_cad_face *face = &m->model->faces[f];
+  p[0] = c[2 * k];
+  p[1] = c[2 * k + 1];
+  HOC_TRY(hoc_cad_face_eval(m->model, f, 1, p, NULL, du, dv));
+  for (double t = ALONG_ELEMENT; hoc_cad_face_singular(face, du, dv) && t < 0.2; t *= 10) {
+    for (int d = 0; d < 2; ++d) {
+      double centroid = (c[d] + c[2 + d] + c[4 + d]) / 3;
+      p[d] = c[2 * k + d] + t * (centroid - c[2 * k + d]);
+    }
+    HOC_TRY(hoc_cad_face_eval(m->model, f, 1, p, NULL, du, dv));
+  }
+  return HOC_OK;
+}
+
 /* The face's normal (unnormalised, oriented as the mesh) at corner k of
  * order-1 element e, as the limit along the element where phi_u x phi_v
  * vanishes at the corner (the criterion of the slot normals). */
 static hoc_status corner_normal(const hoc_mesh *m, size_t e, int k, double *n) {
   int f = m->elem_face[e];
-  const hoc_cad_face *face = &m->model->faces[f];
-  const double *uv = m->elem_uv + 6 * e;
-  double du[3], dv[3];
-  HOC_TRY(hoc_cad_face_eval(m->model, f, 1, uv + 2 * k, NULL, du, dv));
+  double p[2], du[3], dv[3];
+  HOC_TRY(regular_toward_centroid(m, f, m->elem_uv + 6 * e, k, p, du, dv));
   hoc_cross3(du, dv, n);
-  for (double t = ALONG_ELEMENT; hoc_cad_face_singular(face, du, dv) && t < 0.2; t *= 10) {
-    double p[2];
-    for (int d = 0; d < 2; ++d) {
-      double centroid = (uv[d] + uv[2 + d] + uv[4 + d]) / 3;
-      p[d] = uv[2 * k + d] + t * (centroid - uv[2 * k + d]);
-    }
-    HOC_TRY(hoc_cad_face_eval(m->model, f, 1, p, NULL, du, dv));
-    hoc_cross3(du, dv, n);
-  }
   double sign = m->face_orient[f] < 0 ? -1.0 : 1.0;
   for (int d = 0; d < 3; ++d)
     n[d] *= sign;
@@ -74,17 +84,10 @@ hoc_status hoc_mesh_element_folds(const hoc_mesh *mesh, size_t e, int *folds) {
    * (a fold next to a collapsed side lies between it and the next sample) */
   const hoc_cad_face *face = &mesh->model->faces[f];
   for (int corner = 0; corner < 3; ++corner) {
-    double centroid[2], *p = uv + 2 * at[corner == 1 ? N : 0][corner == 2 ? N : 0];
-    double p0[2] = {p[0], p[1]};
-    for (int d = 0; d < 2; ++d)
-      centroid[d] = (c[d] + c[2 + d] + c[4 + d]) / 3;
     double dd[6];
-    HOC_TRY(hoc_cad_face_eval(mesh->model, f, 1, p, NULL, dd, dd + 3));
-    for (double t = ALONG_ELEMENT; hoc_cad_face_singular(face, dd, dd + 3) && t < 0.2; t *= 10) {
-      for (int d = 0; d < 2; ++d)
-        p[d] = p0[d] + t * (centroid[d] - p0[d]);
-      HOC_TRY(hoc_cad_face_eval(mesh->model, f, 1, p, NULL, dd, dd + 3));
-    }
+    HOC_TRY(regular_toward_centroid(mesh, f, c, corner,
+                                    uv + 2 * at[corner == 1 ? N : 0][corner == 2 ? N : 0], dd,
+                                    dd + 3));
   }
   HOC_TRY(hoc_cad_face_eval(mesh->model, f, POINTS, uv, NULL, du, dv));
   for (k = 0; k < POINTS; ++k) {

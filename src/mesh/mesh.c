@@ -373,11 +373,12 @@ hoc_status hoc_mesh_max_cad_distance(const hoc_mesh *mesh, double *distance) {
 }
 
 /* Parameters just inside the face from a point where the parametrisation is
- * singular: moved off every pole side and a little toward the middle. */
-static void nudge_inside(const hoc_cad_face *f, const double *uv, double *out) {
+ * singular: moved toward the middle by `step` of the face's range in each
+ * direction. */
+static void nudge_inside(const hoc_cad_face *f, const double *uv, double step, double *out) {
   for (int d = 0; d < 2; ++d) {
     double mid = 0.5 * (f->lo[d] + f->hi[d]), range = f->hi[d] - f->lo[d];
-    out[d] = uv[d] + 1e-5 * range * (mid > uv[d] ? 1.0 : (mid < uv[d] ? -1.0 : 0.0));
+    out[d] = uv[d] + step * range * (mid > uv[d] ? 1.0 : (mid < uv[d] ? -1.0 : 0.0));
   }
 }
 
@@ -389,7 +390,7 @@ static void nudge_inside(const hoc_cad_face *f, const double *uv, double *out) {
 static void pole_inside(const hoc_cad_face *f, const double *uv, unsigned char pole,
                         double *out) {
   if ((pole & 3) == 3) {
-    nudge_inside(f, uv, out);
+    nudge_inside(f, uv, 1e-5, out);
     return;
   }
   for (int d = 0; d < 2; ++d) {
@@ -412,10 +413,7 @@ static hoc_status slot_normal(const hoc_model *model, int f, const double *uv, c
   if (hoc_cad_face_singular(face, a, b)) {
     double p[2], a2[3], b2[3];
     for (double step = 1e-5; step <= 1.01e-2; step *= 10) {
-      for (int d = 0; d < 2; ++d) {
-        double mid = 0.5 * (face->lo[d] + face->hi[d]), range = face->hi[d] - face->lo[d];
-        p[d] = uv[d] + step * range * (mid > uv[d] ? 1.0 : (mid < uv[d] ? -1.0 : 0.0));
-      }
+      nudge_inside(face, uv, step, p);
       HOC_TRY(hoc_cad_face_eval(model, f, 1, p, NULL, a2, b2));
       hoc_cross3(a2, b2, c);
       if (!hoc_cad_face_singular(face, a2, b2)) break;
