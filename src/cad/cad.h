@@ -205,12 +205,15 @@ typedef enum hoc_analytic_kind {
                             u = b (0 < b < a), as at a B-spline knot where the derivative
                             jumps: phi = (g(u), v, 0), g(u) = u below b, b + (u - b) / 4 above;
                             flat, its parametrisation only C0 */
-  HOC_ANALYTIC_STALL     /* the square [0,a]^2 of a plane whose side u = 0 (b long) stalls, as
+  HOC_ANALYTIC_STALL,    /* the square [0,a]^2 of a plane whose side u = 0 (b long) stalls, as
                             B-spline control rows that coincide to a file's digits:
                             phi = (u^2 - d^2 (1 - exp(-u / d)), (b + u^2) v, 0), d = 1e-6 a:
                             |phi_u| is d there, and phi_u x phi_v, far from 0 next to
                             |phi_u|^2 + |phi_v|^2, points down in an ear a few d wide (no
                             element of a mesh resolves it) and up everywhere else */
+  HOC_ANALYTIC_EAR       /* the same map with d = 1e-3 a: the side u = 0 is regular (|phi_u| =
+                            d), and the face folds at u = 0.3517 d (phi_u = 0), 0.1728 d^2 from
+                            the side; the normal points down in that ear, up past it */
 } hoc_analytic_kind;
 
 /** One analytic face (tag 1) with its seam/pole curves and vertices, thread-safe. */

@@ -61,8 +61,9 @@ static void face_point(const analytic *s, double u, double v, double *x, double 
     U[0] = 1, U[1] = 0, U[2] = 0;
     V[0] = 0, V[1] = 2 * w, V[2] = 3 * w * w;
   } break;
-  case HOC_ANALYTIC_STALL: {
-    double d = 1e-6 * a, e = exp(-u / d);
+  case HOC_ANALYTIC_STALL:
+  case HOC_ANALYTIC_EAR: {
+    double d = (s->kind == HOC_ANALYTIC_EAR ? 1e-3 : 1e-6) * a, e = exp(-u / d);
     X[0] = u * u - d * d * (1 - e), X[1] = (b + u * u) * v, X[2] = 0;
     U[0] = 2 * u - d * e, U[1] = 2 * u * v, U[2] = 0;
     V[0] = 0, V[1] = b + u * u, V[2] = 0;
@@ -136,8 +137,9 @@ static void face_inverse(const analytic *s, const double *x, double *uv) {
     uv[0] = x[0];
     uv[1] = s->b + cbrt(x[2]);
     break;
-  case HOC_ANALYTIC_STALL: { /* (the branch past the ear: x = u^2 - d^2 there) */
-    double d = 1e-6 * s->a;
+  case HOC_ANALYTIC_STALL:
+  case HOC_ANALYTIC_EAR: { /* (the branch past the ear: x = u^2 - d^2 there) */
+    double d = (s->kind == HOC_ANALYTIC_EAR ? 1e-3 : 1e-6) * s->a;
     uv[0] = sqrt(fmax(x[0] + d * d, 0));
     uv[1] = x[1] / (s->b + uv[0] * uv[0]);
   } break;
@@ -187,6 +189,19 @@ static hoc_status an_curve_project(void *ctx, const hoc_cad_curve *c, size_t n,
     /* the curve moves along one parameter: read t from it */
     int k = fabs(d->duv[0]) > fabs(d->duv[1]) ? 0 : 1;
     t[i] = c->lo + (uv[k] - d->uv0[k]) / d->duv[k];
+    /* where the face is two-to-one (the ear of HOC_ANALYTIC_EAR) its
+     * inverse takes one branch: Newton steps on the curve itself */
+    for (int it = 0; it < 8; ++it) {
+      double tt = t[i] - c->lo, y[3], du[3], dv[3], r = 0, g = 0;
+      face_point(s, d->uv0[0] + tt * d->duv[0], d->uv0[1] + tt * d->duv[1], y, du, dv);
+      for (int q = 0; q < 3; ++q) {
+        double dt = du[q] * d->duv[0] + dv[q] * d->duv[1];
+        r += (y[q] - xyz[3 * i + q]) * dt;
+        g += dt * dt;
+      }
+      if (!(fabs(r) > 1e-14 * (s->a + s->b) * sqrt(g))) break;
+      t[i] -= r / g;
+    }
   }
   return HOC_OK;
 }
@@ -229,6 +244,7 @@ hoc_status hoc_cad_create_analytic(hoc_analytic_kind kind, double a, double b,
   case HOC_ANALYTIC_FOLD: nc = 4, nv = 4; break;
   case HOC_ANALYTIC_KINK: nc = 4, nv = 4; break;
   case HOC_ANALYTIC_STALL: nc = 4, nv = 4; break;
+  case HOC_ANALYTIC_EAR: nc = 4, nv = 4; break;
   case HOC_ANALYTIC_SPHERE: nc = 3, nv = 2; break;
   case HOC_ANALYTIC_CYLINDER: nc = 3, nv = 2; break;
   case HOC_ANALYTIC_CONE: nc = 3, nv = 2; break;
@@ -256,10 +272,12 @@ hoc_status hoc_cad_create_analytic(hoc_analytic_kind kind, double a, double b,
   case HOC_ANALYTIC_FOLD:
   case HOC_ANALYTIC_KINK:
   case HOC_ANALYTIC_STALL:
+  case HOC_ANALYTIC_EAR:
     snprintf(f->type, sizeof f->type, "%s",
              kind == HOC_ANALYTIC_PLANE   ? "Plane"
              : kind == HOC_ANALYTIC_FOLD  ? "Folded square"
              : kind == HOC_ANALYTIC_STALL ? "Plane with a stalled side"
+             : kind == HOC_ANALYTIC_EAR   ? "Plane with a folded side"
                                           : "Plane with a knot");
     f->lo[0] = f->lo[1] = 0;
     f->hi[0] = f->hi[1] = a;
@@ -273,8 +291,8 @@ hoc_status hoc_cad_create_analytic(hoc_analytic_kind kind, double a, double b,
     face_point(s, 0, a, m->vertices[3].xyz, NULL, NULL);
     m->bbox[3] = m->bbox[4] = a;
     if (kind == HOC_ANALYTIC_KINK) m->bbox[3] = b + 0.25 * (a - b);
-    if (kind == HOC_ANALYTIC_STALL) { /* x = u^2 - d u, y = (b + u^2) v */
-      m->bbox[0] = -1e-12 * a * a, m->bbox[3] = a * a;
+    if (kind == HOC_ANALYTIC_STALL || kind == HOC_ANALYTIC_EAR) { /* x ~ u^2, y = (b + u^2) v */
+      m->bbox[0] = -(kind == HOC_ANALYTIC_EAR ? 2e-7 : 1e-12) * a * a, m->bbox[3] = a * a;
       m->bbox[4] = (b + a * a) * a;
     }
     if (kind == HOC_ANALYTIC_FOLD) { /* x = u, y = w^2, z = w^3 with w in [-b, a - b] */

@@ -426,6 +426,129 @@ static hoc_status slot_normal(const hoc_model *model, int f, const double *uv, c
   return HOC_OK;
 }
 
+/* A curve or vertex slot and the way from it into its face: the mean of
+ * its elements' centroids, in parameters relative to the slot's. */
+typedef struct inward {
+  size_t slot;
+  double to[2];
+  int count;
+} inward;
+
+static int inward_cmp(const void *key, const void *item) {
+  size_t s = *(const size_t *)key, t = ((const inward *)item)->slot;
+  return s < t ? -1 : s > t;
+}
+
+/* Oriented normal direction (not unit) of face f at uv; 0 where singular. */
+static hoc_status face_direction(const hoc_mesh *m, int f, const double *uv, double *c) {
+  double du[3], dv[3];
+  HOC_TRY(hoc_cad_face_eval(m->model, f, 1, uv, NULL, du, dv));
+  hoc_cross3(du, dv, c);
+  double sign = m->face_orient[f] < 0 ? -1.0 : 1.0;
+  int singular = hoc_cad_face_singular(&m->model->faces[f], du, dv);
+  for (int d = 0; d < 3; ++d) c[d] = singular ? 0.0 : sign * c[d];
+  return HOC_OK;
+}
+
+/* Bisection steps that find where the normal turns across between a slot
+ * and its elements' middle (to 2^-40 of the way). */
+enum { FOLD_BISECTIONS = 40 };
+
+/* A face that turns over within the model's tolerance of its boundary. A
+ * curve lies on the faces it bounds only to the model's tolerance
+ * (hoc_cad_tolerance), and where a trimmed face's untrimmed
+ * parametrisation folds (phi_u x phi_v vanishes and reverses) or curls
+ * over (turns its normal by more than 90 degrees) along that boundary, the
+ * curve's point on the face can land on the far side, in a strip narrower
+ * than the tolerance (repatch_hpdc: a fold 1.5e-4 inside, the tolerance
+ * 0.01; the bottle's face 4: 140 degrees within 0.025 of its side, the
+ * tolerance 0.013). The normal there points away from the face's. A curve
+ * or vertex slot whose normal is opposite (beyond 90 degrees) to the
+ * face's halfway to its elements' middle, where the point at which the
+ * normal turns across (its component along the halfway one changes sign)
+ * is within the tolerance of the node, takes the face's normal as far past
+ * that point as the slot is before it. A wider fold stays: the measure
+ * sees it. */
+static hoc_status boundary_fold_normals(const hoc_mesh *m, const unsigned char *which,
+                                        double *normal) {
+  double tol = 0;
+  HOC_TRY(hoc_cad_tolerance(m->model, &tol));
+  if (!(tol > 0)) return HOC_OK;
+  size_t n = 0;
+  for (size_t s = 0; s < m->n_slots; ++s)
+    n += (!which || which[s]) && !m->slot_pole[s] && m->dim[m->slot_node[s]] != HOC_ON_FACE;
+  if (!n) return HOC_OK;
+  inward *in;
+  HOC_ALLOC(in, n);
+  n = 0;
+  for (size_t s = 0; s < m->n_slots; ++s)
+    if ((!which || which[s]) && !m->slot_pole[s] && m->dim[m->slot_node[s]] != HOC_ON_FACE)
+      in[n++] = (inward){.slot = s};
+  size_t np = (size_t)m->np;
+  for (size_t e = 0; e < m->n_elems; ++e) {
+    const double *uv = m->elem_uv + 2 * e * np;
+    for (size_t k = 0; k < np; ++k) {
+      if (m->dim[m->conn[e * np + k]] == HOC_ON_FACE) continue;
+      inward *w = bsearch(m->elem_slot + e * np + k, in, n, sizeof *in, inward_cmp);
+      if (!w) continue;
+      for (int d = 0; d < 2; ++d) w->to[d] += (uv[d] + uv[2 + d] + uv[4 + d]) / 3 - uv[2 * k + d];
+      w->count++;
+    }
+  }
+  hoc_status status = HOC_OK;
+  for (size_t j = 0; j < n && status == HOC_OK; ++j) {
+    const inward *w = in + j;
+    size_t s = w->slot;
+    int f = m->slot_face[s];
+    double *ns = normal + 3 * s, p[2], mid[3], c[3], x[3];
+    const double *uv = m->slot_uv + 2 * s;
+    if (!w->count) continue;
+    double to[2] = {w->to[0] / w->count, w->to[1] / w->count};
+    for (int d = 0; d < 2; ++d) p[d] = uv[d] + 0.5 * to[d];
+    HOC_TRY_GOTO(face_direction(m, f, p, mid), done);
+    if (hoc_dot3(mid, ns) >= 0) continue; /* (singular halfway: 0, nothing known) */
+    /* where the normal turns across, between the slot (t = 0) and halfway
+     * (t = 1/2) */
+    double lo = 0, hi = 0.5;
+    for (int it = 0; it < FOLD_BISECTIONS; ++it) {
+      double t = 0.5 * (lo + hi);
+      for (int d = 0; d < 2; ++d) p[d] = uv[d] + t * to[d];
+      HOC_TRY_GOTO(face_direction(m, f, p, c), done);
+      if (hoc_dot3(c, mid) > 0) hi = t;
+      else lo = t;
+    }
+    /* that line's nearest point: the foot of the slot on the line through
+     * the crossing across the gradient, in parameters, of the normal's
+     * component along `mid` (central differences) */
+    double cross[2] = {uv[0] + hi * to[0], uv[1] + hi * to[1]}, grad[2], g[2];
+    double h = 1e-3 * hi * hypot(to[0], to[1]);
+    for (int d = 0; d < 2; ++d) {
+      for (int side = 0; side < 2; ++side) {
+        memcpy(p, cross, sizeof p);
+        p[d] += side ? h : -h;
+        HOC_TRY_GOTO(face_direction(m, f, p, c), done);
+        g[side] = hoc_dot3(c, mid);
+      }
+      grad[d] = g[1] - g[0];
+    }
+    double gg = grad[0] * grad[0] + grad[1] * grad[1];
+    if (!(gg > 0)) continue;
+    double along = ((cross[0] - uv[0]) * grad[0] + (cross[1] - uv[1]) * grad[1]) / gg;
+    for (int d = 0; d < 2; ++d) p[d] = uv[d] + along * grad[d];
+    HOC_TRY_GOTO(hoc_cad_face_eval(m->model, f, 1, p, x, NULL, NULL), done);
+    if (!(hoc_dist3(x, m->xyz + 3 * m->slot_node[s]) <= tol)) continue;
+    /* the normal past the line, or halfway where the face is singular there */
+    for (int d = 0; d < 2; ++d) p[d] = uv[d] + fmin(2 * hi, 0.5) * to[d];
+    HOC_TRY_GOTO(face_direction(m, f, p, c), done);
+    if (!(hoc_dot3(c, mid) > 0)) memcpy(c, mid, sizeof c);
+    double inv = 1 / sqrt(hoc_dot3(c, c));
+    for (int d = 0; d < 3; ++d) ns[d] = c[d] * inv;
+  }
+done:
+  free(in);
+  return status;
+}
+
 hoc_status hoc_mesh_slot_normals(const hoc_mesh *m, double *normal) {
   return hoc_mesh_slot_normals_of(m, NULL, normal);
 }
@@ -482,6 +605,7 @@ hoc_status hoc_mesh_slot_normals_of(const hoc_mesh *m, const unsigned char *whic
     free(dv);
   }
   status = hoc_par_error_raise(&err);
+  if (status == HOC_OK) status = boundary_fold_normals(m, which, normal);
 done:
   free(start);
   free(order);

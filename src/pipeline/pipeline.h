@@ -95,8 +95,7 @@
 /* Splits per chain where the tangled elements are on faces that fold
  * (hoc_repair_tangled_on_folds): a split adds elements across the fold
  * (surf114.igs, its inverted linear elements split: 29, 67, 148), and each
- * split's optimisation keeps the ones across it tangled to its last sweep;
- * the bottle's one split at order 2 is its first. */
+ * split's optimisation keeps the ones across it tangled to its last sweep. */
 #define HOC_PIPELINE_FOLD_SPLITS 1
 
 /* The most stages one attempt has: linear, high-order, split, optimized,
