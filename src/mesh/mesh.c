@@ -451,8 +451,8 @@ static hoc_status face_direction(const hoc_mesh *m, int f, const double *uv, dou
 }
 
 /* Bisection steps that find where the normal turns across between a slot
- * and its elements' middle (to 2^-40 of the way). */
-enum { FOLD_BISECTIONS = 40 };
+ * and its elements' middle (to 2^-30 of the way). */
+enum { FOLD_BISECTIONS = 30 };
 
 /* A face that turns over within the model's tolerance of its boundary. A
  * curve lies on the faces it bounds only to the model's tolerance
@@ -469,6 +469,53 @@ enum { FOLD_BISECTIONS = 40 };
  * is within the tolerance of the node, takes the face's normal as far past
  * that point as the slot is before it. A wider fold stays: the measure
  * sees it. */
+hoc_status hoc_mesh_turned_normal(const hoc_mesh *m, int f, const double *uv, const double *x,
+                                  const double *to, double tol, double *normal) {
+  double p[2], mid[3], c[3], y[3];
+  for (int d = 0; d < 2; ++d) p[d] = uv[d] + 0.5 * to[d];
+  HOC_TRY(face_direction(m, f, p, mid));
+  if (hoc_dot3(mid, normal) >= 0) return HOC_OK; /* (singular halfway: 0, nothing known) */
+  /* where the normal turns across, between the slot (t = 0) and halfway
+   * (t = 1/2) */
+  double lo = 0, hi = 0.5;
+  for (int it = 0; it < FOLD_BISECTIONS; ++it) {
+    double t = 0.5 * (lo + hi);
+    for (int d = 0; d < 2; ++d) p[d] = uv[d] + t * to[d];
+    HOC_TRY(face_direction(m, f, p, c));
+    if (hoc_dot3(c, mid) > 0) hi = t;
+    else lo = t;
+  }
+  /* that line's nearest point: the foot of the slot on the line through
+   * the crossing across the gradient, in parameters, of the normal's
+   * component along `mid` (central differences) */
+  double cross[2] = {uv[0] + hi * to[0], uv[1] + hi * to[1]}, grad[2], g[2];
+  double h = 1e-3 * hi * hypot(to[0], to[1]);
+  for (int d = 0; d < 2; ++d) {
+    for (int side = 0; side < 2; ++side) {
+      memcpy(p, cross, sizeof p);
+      p[d] += side ? h : -h;
+      HOC_TRY(face_direction(m, f, p, c));
+      g[side] = hoc_dot3(c, mid);
+    }
+    grad[d] = g[1] - g[0];
+  }
+  double gg = grad[0] * grad[0] + grad[1] * grad[1];
+  if (!(gg > 0)) return HOC_OK;
+  double along = ((cross[0] - uv[0]) * grad[0] + (cross[1] - uv[1]) * grad[1]) / gg;
+  for (int d = 0; d < 2; ++d) p[d] = uv[d] + along * grad[d];
+  HOC_TRY(hoc_cad_face_eval(m->model, f, 1, p, y, NULL, NULL));
+  if (!(hoc_dist3(y, x) <= tol)) return HOC_OK;
+  /* the normal past the line, or halfway where the face is singular there */
+  for (int d = 0; d < 2; ++d) p[d] = uv[d] + fmin(2 * hi, 0.5) * to[d];
+  HOC_TRY(face_direction(m, f, p, c));
+  if (!(hoc_dot3(c, mid) > 0)) memcpy(c, mid, sizeof c);
+  double inv = 1 / sqrt(hoc_dot3(c, c));
+  for (int d = 0; d < 3; ++d) normal[d] = c[d] * inv;
+  return HOC_OK;
+}
+
+/* hoc_mesh_turned_normal at the curve and vertex slots flagged in which
+ * (all if NULL), each toward the mean of its elements' middles. */
 static hoc_status boundary_fold_normals(const hoc_mesh *m, const unsigned char *which,
                                         double *normal) {
   double tol = 0;
@@ -499,52 +546,11 @@ static hoc_status boundary_fold_normals(const hoc_mesh *m, const unsigned char *
   for (size_t j = 0; j < n && status == HOC_OK; ++j) {
     const inward *w = in + j;
     size_t s = w->slot;
-    int f = m->slot_face[s];
-    double *ns = normal + 3 * s, p[2], mid[3], c[3], x[3];
-    const double *uv = m->slot_uv + 2 * s;
     if (!w->count) continue;
     double to[2] = {w->to[0] / w->count, w->to[1] / w->count};
-    for (int d = 0; d < 2; ++d) p[d] = uv[d] + 0.5 * to[d];
-    HOC_TRY_GOTO(face_direction(m, f, p, mid), done);
-    if (hoc_dot3(mid, ns) >= 0) continue; /* (singular halfway: 0, nothing known) */
-    /* where the normal turns across, between the slot (t = 0) and halfway
-     * (t = 1/2) */
-    double lo = 0, hi = 0.5;
-    for (int it = 0; it < FOLD_BISECTIONS; ++it) {
-      double t = 0.5 * (lo + hi);
-      for (int d = 0; d < 2; ++d) p[d] = uv[d] + t * to[d];
-      HOC_TRY_GOTO(face_direction(m, f, p, c), done);
-      if (hoc_dot3(c, mid) > 0) hi = t;
-      else lo = t;
-    }
-    /* that line's nearest point: the foot of the slot on the line through
-     * the crossing across the gradient, in parameters, of the normal's
-     * component along `mid` (central differences) */
-    double cross[2] = {uv[0] + hi * to[0], uv[1] + hi * to[1]}, grad[2], g[2];
-    double h = 1e-3 * hi * hypot(to[0], to[1]);
-    for (int d = 0; d < 2; ++d) {
-      for (int side = 0; side < 2; ++side) {
-        memcpy(p, cross, sizeof p);
-        p[d] += side ? h : -h;
-        HOC_TRY_GOTO(face_direction(m, f, p, c), done);
-        g[side] = hoc_dot3(c, mid);
-      }
-      grad[d] = g[1] - g[0];
-    }
-    double gg = grad[0] * grad[0] + grad[1] * grad[1];
-    if (!(gg > 0)) continue;
-    double along = ((cross[0] - uv[0]) * grad[0] + (cross[1] - uv[1]) * grad[1]) / gg;
-    for (int d = 0; d < 2; ++d) p[d] = uv[d] + along * grad[d];
-    HOC_TRY_GOTO(hoc_cad_face_eval(m->model, f, 1, p, x, NULL, NULL), done);
-    if (!(hoc_dist3(x, m->xyz + 3 * m->slot_node[s]) <= tol)) continue;
-    /* the normal past the line, or halfway where the face is singular there */
-    for (int d = 0; d < 2; ++d) p[d] = uv[d] + fmin(2 * hi, 0.5) * to[d];
-    HOC_TRY_GOTO(face_direction(m, f, p, c), done);
-    if (!(hoc_dot3(c, mid) > 0)) memcpy(c, mid, sizeof c);
-    double inv = 1 / sqrt(hoc_dot3(c, c));
-    for (int d = 0; d < 3; ++d) ns[d] = c[d] * inv;
+    status = hoc_mesh_turned_normal(m, m->slot_face[s], m->slot_uv + 2 * s,
+                                    m->xyz + 3 * m->slot_node[s], to, tol, normal + 3 * s);
   }
-done:
   free(in);
   return status;
 }

@@ -248,6 +248,14 @@ hoc_status hoc_curves_angle_at(const hoc_model *model, int vertex, const int c[2
  *  the normal is the limit along the slot's element, taken just off the
  *  pole at the element's arbitrary coordinate). normal[n_slots][3]. */
 hoc_status hoc_mesh_slot_normals(const hoc_mesh *mesh, double *normal);
+/** The rule of hoc_mesh_slot_normals for a curve or vertex slot on face f
+ *  at parameters uv (its own or a trial's), its node at x: where the face
+ *  turns over (its normal by more than 90 degrees) between uv and halfway
+ *  along `to` (parameters into the face, toward its elements' middle) at a
+ *  line within `tol` (the model's tolerance) of x, *normal (unit, oriented,
+ *  in and out) becomes the face's past that line. */
+hoc_status hoc_mesh_turned_normal(const hoc_mesh *m, int f, const double *uv, const double *x,
+                                  const double *to, double tol, double *normal);
 /** The same for the slots flagged in which[n_slots] (all if NULL); the
  *  others' normals are left as they are. */
 hoc_status hoc_mesh_slot_normals_of(const hoc_mesh *mesh, const unsigned char *which,

@@ -172,11 +172,32 @@ hoc_status hoc_opt_eval_trial(hoc_opt *o, size_t i) {
       o->trial.tslot_uv[2 * t] = uv[0];
       o->trial.tslot_uv[2 * t + 1] = uv[1];
       HOC_TRY(face_normal(o, f, uv, du, dv, o->trial.tnormal + 3 * t));
-      /* a small move cannot turn the surface over: where the CAD normal
-       * flips (a folded parametrisation at the boundary, see
-       * hoc_mesh_slot_normals) the slot keeps its orientation */
-      const double *old = o->node.normal + 3 * s;
       double *nw = o->trial.tnormal + 3 * t;
+      const double *old = o->node.normal + 3 * s;
+      /* a face that turns over within the model's tolerance of the node
+       * (hoc_mesh_slot_normals), toward the node's elements on the face:
+       * looked for where the normal turned against the slot's last one */
+      int against = nw[0] * old[0] + nw[1] * old[1] + nw[2] * old[2] < 0;
+      if (against && model->tolerance_known && model->tolerance > 0 && !m->slot_pole[s]) {
+        double to[2] = {0, 0};
+        int count = 0;
+        size_t np = (size_t)m->np;
+        for (size_t j2 = o->adj.ne_start[i]; j2 < o->adj.ne_start[i + 1]; ++j2) {
+          size_t e = o->adj.ne_elem[j2], k = o->adj.ne_local[j2];
+          if (m->elem_face[e] != f) continue;
+          const double *c = m->elem_uv + 2 * e * np;
+          for (int d = 0; d < 2; ++d) to[d] += (c[d] + c[2 + d] + c[4 + d]) / 3 - c[2 * k + d];
+          ++count;
+        }
+        if (count) {
+          to[0] /= count;
+          to[1] /= count;
+          HOC_TRY(hoc_mesh_turned_normal(m, f, uv, tx, to, model->tolerance, nw));
+        }
+      }
+      /* a small move cannot turn the surface over: where the CAD normal
+       * flips (a folded parametrisation at the boundary, beyond the
+       * model's tolerance) the slot keeps its orientation */
       if (nw[0] * old[0] + nw[1] * old[1] + nw[2] * old[2] < 0)
         for (int d = 0; d < 3; ++d)
           nw[d] = -nw[d];
