@@ -469,6 +469,11 @@ enum { FOLD_BISECTIONS = 30 };
  * is within the tolerance of the node, takes the face's normal as far past
  * that point as the slot is before it. A wider fold stays: the measure
  * sees it. */
+void hoc_mesh_add_inward(const hoc_mesh *m, size_t e, size_t k, double *to) {
+  const double *uv = m->elem_uv + 2 * e * (size_t)m->np;
+  for (int d = 0; d < 2; ++d) to[d] += (uv[d] + uv[2 + d] + uv[4 + d]) / 3 - uv[2 * k + d];
+}
+
 hoc_status hoc_mesh_turned_normal(const hoc_mesh *m, int f, const double *uv, const double *x,
                                   const double *to, double tol, double *normal) {
   double p[2], mid[3], c[3], y[3];
@@ -533,12 +538,11 @@ static hoc_status boundary_fold_normals(const hoc_mesh *m, const unsigned char *
       in[n++] = (inward){.slot = s};
   size_t np = (size_t)m->np;
   for (size_t e = 0; e < m->n_elems; ++e) {
-    const double *uv = m->elem_uv + 2 * e * np;
     for (size_t k = 0; k < np; ++k) {
       if (m->dim[m->conn[e * np + k]] == HOC_ON_FACE) continue;
       inward *w = bsearch(m->elem_slot + e * np + k, in, n, sizeof *in, inward_cmp);
       if (!w) continue;
-      for (int d = 0; d < 2; ++d) w->to[d] += (uv[d] + uv[2 + d] + uv[4 + d]) / 3 - uv[2 * k + d];
+      hoc_mesh_add_inward(m, e, k, w->to);
       w->count++;
     }
   }

@@ -248,6 +248,9 @@ hoc_status hoc_curves_angle_at(const hoc_model *model, int vertex, const int c[2
  *  the normal is the limit along the slot's element, taken just off the
  *  pole at the element's arbitrary coordinate). normal[n_slots][3]. */
 hoc_status hoc_mesh_slot_normals(const hoc_mesh *mesh, double *normal);
+/** Adds to to[2] the way from element e's local node k to the element's
+ *  middle (its corners' mean), in the element's parameters. */
+void hoc_mesh_add_inward(const hoc_mesh *m, size_t e, size_t k, double *to);
 /** The rule of hoc_mesh_slot_normals for a curve or vertex slot on face f
  *  at parameters uv (its own or a trial's), its node at x: where the face
  *  turns over (its normal by more than 90 degrees) between uv and halfway

@@ -181,12 +181,10 @@ hoc_status hoc_opt_eval_trial(hoc_opt *o, size_t i) {
       if (against && model->tolerance_known && model->tolerance > 0 && !m->slot_pole[s]) {
         double to[2] = {0, 0};
         int count = 0;
-        size_t np = (size_t)m->np;
         for (size_t j2 = o->adj.ne_start[i]; j2 < o->adj.ne_start[i + 1]; ++j2) {
-          size_t e = o->adj.ne_elem[j2], k = o->adj.ne_local[j2];
+          size_t e = o->adj.ne_elem[j2];
           if (m->elem_face[e] != f) continue;
-          const double *c = m->elem_uv + 2 * e * np;
-          for (int d = 0; d < 2; ++d) to[d] += (c[d] + c[2 + d] + c[4 + d]) / 3 - c[2 * k + d];
+          hoc_mesh_add_inward(m, e, o->adj.ne_local[j2], to);
           ++count;
         }
         if (count) {
