@@ -24,6 +24,12 @@ typedef struct analytic {
   curve_def curves[4];
 } analytic;
 
+/* d of HOC_ANALYTIC_STALL and HOC_ANALYTIC_EAR: the scale of the ear at
+ * their side u = 0. */
+static double ear_width(const analytic *s) {
+  return (s->kind == HOC_ANALYTIC_EAR ? 1e-3 : 1e-6) * s->a;
+}
+
 static void face_point(const analytic *s, double u, double v, double *x, double *du, double *dv) {
   double a = s->a, b = s->b, cu = cos(u), su = sin(u), cv = cos(v), sv = sin(v);
   double X[3], U[3], V[3];
@@ -63,7 +69,7 @@ static void face_point(const analytic *s, double u, double v, double *x, double 
   } break;
   case HOC_ANALYTIC_STALL:
   case HOC_ANALYTIC_EAR: {
-    double d = (s->kind == HOC_ANALYTIC_EAR ? 1e-3 : 1e-6) * a, e = exp(-u / d);
+    double d = ear_width(s), e = exp(-u / d);
     X[0] = u * u - d * d * (1 - e), X[1] = (b + u * u) * v, X[2] = 0;
     U[0] = 2 * u - d * e, U[1] = 2 * u * v, U[2] = 0;
     V[0] = 0, V[1] = b + u * u, V[2] = 0;
@@ -139,7 +145,7 @@ static void face_inverse(const analytic *s, const double *x, double *uv) {
     break;
   case HOC_ANALYTIC_STALL:
   case HOC_ANALYTIC_EAR: { /* (the branch past the ear: x = u^2 - d^2 there) */
-    double d = (s->kind == HOC_ANALYTIC_EAR ? 1e-3 : 1e-6) * s->a;
+    double d = ear_width(s);
     uv[0] = sqrt(fmax(x[0] + d * d, 0));
     uv[1] = x[1] / (s->b + uv[0] * uv[0]);
   } break;

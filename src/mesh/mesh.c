@@ -454,6 +454,11 @@ static hoc_status face_direction(const hoc_mesh *m, int f, const double *uv, dou
  * and its elements' middle (to 2^-30 of the way). */
 enum { FOLD_BISECTIONS = 30 };
 
+void hoc_mesh_add_inward(const hoc_mesh *m, size_t e, size_t k, double *to) {
+  const double *uv = m->elem_uv + 2 * e * (size_t)m->np;
+  for (int d = 0; d < 2; ++d) to[d] += (uv[d] + uv[2 + d] + uv[4 + d]) / 3 - uv[2 * k + d];
+}
+
 /* A face that turns over within the model's tolerance of its boundary. A
  * curve lies on the faces it bounds only to the model's tolerance
  * (hoc_cad_tolerance), and where a trimmed face's untrimmed
@@ -469,11 +474,6 @@ enum { FOLD_BISECTIONS = 30 };
  * is within the tolerance of the node, takes the face's normal as far past
  * that point as the slot is before it. A wider fold stays: the measure
  * sees it. */
-void hoc_mesh_add_inward(const hoc_mesh *m, size_t e, size_t k, double *to) {
-  const double *uv = m->elem_uv + 2 * e * (size_t)m->np;
-  for (int d = 0; d < 2; ++d) to[d] += (uv[d] + uv[2 + d] + uv[4 + d]) / 3 - uv[2 * k + d];
-}
-
 hoc_status hoc_mesh_turned_normal(const hoc_mesh *m, int f, const double *uv, const double *x,
                                   const double *to, double tol, double *normal) {
   double p[2], mid[3], c[3], y[3];
@@ -519,6 +519,11 @@ hoc_status hoc_mesh_turned_normal(const hoc_mesh *m, int f, const double *uv, co
   return HOC_OK;
 }
 
+/* A curve or vertex slot, not at a pole, flagged in which (all if NULL). */
+static int boundary_slot(const hoc_mesh *m, const unsigned char *which, size_t s) {
+  return (!which || which[s]) && !m->slot_pole[s] && m->dim[m->slot_node[s]] != HOC_ON_FACE;
+}
+
 /* hoc_mesh_turned_normal at the curve and vertex slots flagged in which
  * (all if NULL), each toward the mean of its elements' middles. */
 static hoc_status boundary_fold_normals(const hoc_mesh *m, const unsigned char *which,
@@ -527,15 +532,13 @@ static hoc_status boundary_fold_normals(const hoc_mesh *m, const unsigned char *
   HOC_TRY(hoc_cad_tolerance(m->model, &tol));
   if (!(tol > 0)) return HOC_OK;
   size_t n = 0;
-  for (size_t s = 0; s < m->n_slots; ++s)
-    n += (!which || which[s]) && !m->slot_pole[s] && m->dim[m->slot_node[s]] != HOC_ON_FACE;
+  for (size_t s = 0; s < m->n_slots; ++s) n += boundary_slot(m, which, s);
   if (!n) return HOC_OK;
   inward *in;
   HOC_ALLOC(in, n);
   n = 0;
   for (size_t s = 0; s < m->n_slots; ++s)
-    if ((!which || which[s]) && !m->slot_pole[s] && m->dim[m->slot_node[s]] != HOC_ON_FACE)
-      in[n++] = (inward){.slot = s};
+    if (boundary_slot(m, which, s)) in[n++] = (inward){.slot = s};
   size_t np = (size_t)m->np;
   for (size_t e = 0; e < m->n_elems; ++e) {
     for (size_t k = 0; k < np; ++k) {
