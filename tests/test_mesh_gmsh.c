@@ -81,9 +81,14 @@ static void gmsh_own_mesh(int p, const char *path) {
 static void test_gmsh_order3_t20(void) {
   hoc_model *model = open_bundled("gmsh_t20_component8.step");
   if (!model) return;
-  gmsh_own_mesh(3, "t20_gmsh_order3.msh");
+  /* the file goes to a directory of its own, removed afterwards */
+  char dir[] = "mesh-gmsh-t20-XXXXXX";
+  CHECK(mkdtemp(dir) != NULL);
+  char path[64];
+  snprintf(path, sizeof path, "%s/t20_gmsh_order3.msh", dir);
+  gmsh_own_mesh(3, path);
   hoc_mesh *m;
-  CHECK_OK(hoc_mesh_read_msh(model, "t20_gmsh_order3.msh", &m));
+  CHECK_OK(hoc_mesh_read_msh(model, path, &m));
   if (m) {
     CHECK(m->order == 3);
     hoc_quality_stats st;
@@ -96,6 +101,8 @@ static void test_gmsh_order3_t20(void) {
     CHECK(dist <= 1e-10 * model->diagonal);
     hoc_mesh_destroy(&m);
   }
+  remove(path);
+  CHECK(rmdir(dir) == 0);
   hoc_model_destroy(&model);
 }
 
