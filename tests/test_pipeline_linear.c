@@ -7,9 +7,10 @@
  * again with MeshAdapt and its linear stage has none.
  *
  * surf114_face1.brep: a spline patch whose normal reverses along a curve
- * near each end of u (phi_v changes sign there): every mesh of it has
- * elements across those folds, which hoc_mesh_model names and, when they
- * stay tangled, splits instead of meshing the face again finer.
+ * near each end of u (phi_v changes sign there): every mesh of it whose
+ * edges do not follow those folds has elements across them, which
+ * hoc_mesh_model names and, when they stay tangled, splits instead of
+ * meshing the face again finer.
  * SPDX-License-Identifier: GPL-2.0-or-later */
 #include "hocad.h"
 #include "mesh/mesh.h"

@@ -176,7 +176,7 @@ static hoc_status find_tangled(hoc_report *report, const hoc_mesh *mesh, const d
   for (size_t e = 0; e < ne; ++e)
     total += q[e] == 0.0;
   if (!total) return HOC_OK;
-  /* elements across a fold of their face: no finer mesh avoids those */
+  /* elements across a fold of their face: no finer mesh of the same kind avoids those */
   size_t across = 0;
   for (size_t e = 0; e < ne; ++e) {
     int folds = 0;
@@ -188,8 +188,8 @@ static hoc_status find_tangled(hoc_report *report, const hoc_mesh *mesh, const d
   if (all_across)
     text_add(&t,
              "%zu element(s) tangled across a fold of their face, where its normal phi_u x "
-             "phi_v reverses (the CAD face folds on itself; every mesh of the face crosses the "
-             "fold, a finer one with more elements):",
+             "phi_v reverses (the CAD face folds on itself; a mesh whose edges do not follow the "
+             "fold crosses it, a finer one with more elements):",
              total);
   else if (opt && !s->converged && opt->result.stopped_at_limit && s->iterations >= 10 &&
            2 * opt->result.best_iteration <= s->iterations)
@@ -216,7 +216,7 @@ static hoc_status find_tangled(hoc_report *report, const hoc_mesh *mesh, const d
   if (across && !all_across)
     text_add(&t,
              "; %zu of them cross a fold of their face, where its normal phi_u x phi_v "
-             "reverses, which every mesh of that face crosses",
+             "reverses, which a mesh whose edges do not follow it crosses",
              across);
   return add_finding(report, HOC_EVENT_WARNING, &t);
 }
