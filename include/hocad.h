@@ -687,6 +687,11 @@ size_t hoc_report_tangled(const hoc_report *report);
 /** Faces the linear mesher could not mesh in the kept attempt (they have no
  *  elements; hoc_mesh_model only). */
 int hoc_report_num_failed_faces(const hoc_report *report);
+/** Wall seconds of the whole run: its stages (their `seconds`) and what
+ *  they do not hold, the attempts not kept (an optimisation before a split
+ *  or a remeshing, a split that left no fewer tangled) and the closing
+ *  measure. Opening the model and writing files are not in it. */
+double hoc_report_seconds(const hoc_report *report);
 /** Elements and nodes of the result. */
 size_t hoc_report_num_elements(const hoc_report *report);
 size_t hoc_report_num_nodes(const hoc_report *report);
@@ -723,7 +728,8 @@ typedef struct hoc_report_files {
  *  hoc_mesh_model, hoc_mesh_repair, hoc_mesh_quality_report), "model",
  *  "mesh", "measure", "version", "stages" (each with the optimiser's
  *  diagnostics when optimised), "refinements", "remeshings", "nodes",
- *  "model_seconds", "write_seconds"; numbers with 17 digits.
+ *  "seconds" (hoc_report_seconds), "model_seconds", "write_seconds";
+ *  numbers with 17 digits.
  *  @param[in]  files  NULL, or the caller's files
  *  @param[out] json   NUL-terminated text, free it with free(); NULL on failure */
 hoc_status hoc_report_json(const hoc_report *report, const hoc_report_files *files, char **json);

@@ -77,6 +77,11 @@ static void test_stages(hoc_model *model) {
   size_t ne = hoc_mesh_num_elements(mesh);
   CHECK(hoc_report_num_elements(r) == ne);
   CHECK(hoc_report_num_nodes(r) == hoc_mesh_num_nodes(mesh));
+  /* the run's seconds hold its stages' and their measuring */
+  double staged = 0;
+  for (size_t i = 0; i < hoc_report_num_stages(r); ++i)
+    staged += hoc_report_stage(r, i)->seconds + hoc_report_stage(r, i)->stats.seconds;
+  CHECK(staged > 0 && hoc_report_seconds(r) >= staged);
   double *q = malloc(ne * sizeof *q);
   hoc_quality_stats st;
   CHECK_OK(hoc_mesh_measure(mesh, HOC_MEASURE_SHAPE, q, NULL, &st));
@@ -98,6 +103,10 @@ static void test_stages(hoc_model *model) {
     snprintf(nodes, sizeof nodes, "\"nodes\": %zu,", hoc_mesh_num_nodes(mesh));
     CHECK(strstr(json, nodes) != NULL);
     CHECK(strstr(json, "\"model_seconds\": 0.500000") && strstr(json, "\"best_iteration\""));
+    char seconds[64];
+    snprintf(seconds, sizeof seconds, "\"seconds\": %.6f,\n  \"model_seconds\"",
+             hoc_report_seconds(r));
+    CHECK(strstr(json, seconds) != NULL);
     free(json);
   }
   CHECK_OK(hoc_report_json(r, NULL, &json));

@@ -421,6 +421,14 @@ static void print_table(const hoc_report *r) {
       printf(", %zu untangled by the final polish", res->diagnostics.polished);
     printf("\n");
   }
+  /* the time the table does not show: attempts not kept, measuring */
+  if (n > 1) {
+    double staged = 0;
+    for (size_t i = 0; i < n; ++i)
+      staged += hoc_report_stage(r, i)->seconds + hoc_report_stage(r, i)->stats.seconds;
+    double total = hoc_report_seconds(r), rest = total > staged ? total - staged : 0;
+    printf("total: %.3f s, %.3f s of them in attempts not kept and in measuring\n", total, rest);
+  }
 }
 
 /* What the report finds about the result, on stderr, also when quiet. */

@@ -297,6 +297,7 @@ _PROTOTYPES = {
     "hoc_report_num_failed_faces": (c_int, [_P]),
     "hoc_report_num_elements": (c_size_t, [_P]),
     "hoc_report_num_nodes": (c_size_t, [_P]),
+    "hoc_report_seconds": (c_double, [_P]),
     "hoc_report_quality": (_DP, [_P]),
     "hoc_report_num_findings": (c_size_t, [_P]),
     "hoc_report_finding": (c_char_p, [_P, c_size_t, _IP]),

@@ -489,6 +489,7 @@ hoc_status hoc_mesh_model(hoc_model *model, const hoc_mesh_options *options, hoc
   if (report) *report = NULL;
   HOC_CHECK(model, HOC_ERR_ARGUMENT, "no model given");
   hoc_run run;
+  double t0 = hoc_pipeline_now();
   HOC_TRY(run_start(&run, options));
   HOC_TRY(check_model_options(model, &run.o));
   if (run.o.refinements < 0)
@@ -503,7 +504,7 @@ hoc_status hoc_mesh_model(hoc_model *model, const hoc_mesh_options *options, hoc
     int find = HOC_FIND_TANGLED | HOC_FIND_FROM_CAD;
     if (run.o.optimize && run.o.order > 1) find |= HOC_FIND_CUSPS;
     rep->failed_faces = hoc_mesh_num_failed_faces(m.lin);
-    status = hoc_report_finish(rep, &r, final, find);
+    status = hoc_report_finish(rep, &r, final, find, t0);
   }
   if (status == HOC_OK && run.o.keep_stages) {
     /* the linear mesh is the result itself at order 1: the report has a copy */
@@ -561,7 +562,7 @@ hoc_status hoc_mesh_repair(const hoc_mesh *in, const hoc_mesh_options *options, 
     HOC_TRY_GOTO(hoc_repair_refine_tangled(&run, &r, 1, &cur, start, 0), done);
   hoc_mesh_destroy(&start);
   HOC_TRY_GOTO(hoc_report_create("optimize", run.o.measure, &rep), done);
-  HOC_TRY_GOTO(hoc_report_finish(rep, &r, cur, HOC_FIND_TANGLED), done);
+  HOC_TRY_GOTO(hoc_report_finish(rep, &r, cur, HOC_FIND_TANGLED, t0), done);
   if (mesh) {
     *mesh = cur;
     cur = NULL;
@@ -593,7 +594,7 @@ hoc_status hoc_mesh_quality_report(const hoc_mesh *mesh, hoc_measure measure, ho
   double t0 = hoc_pipeline_now();
   hoc_status status = hoc_run_stage(&run, &r, "input", mesh, hoc_pipeline_now() - t0, NULL, NULL);
   if (status == HOC_OK) status = hoc_report_create("quality", measure, &rep);
-  if (status == HOC_OK) status = hoc_report_finish(rep, &r, mesh, HOC_FIND_NOTHING);
+  if (status == HOC_OK) status = hoc_report_finish(rep, &r, mesh, HOC_FIND_NOTHING, t0);
   if (status == HOC_OK)
     *report = rep;
   else

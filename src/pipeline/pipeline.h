@@ -125,6 +125,7 @@ struct hoc_report {
   const char *command; /* "mesh", "optimize" or "quality" */
   hoc_measure measure;
   hoc_stages r; /* the result's stages */
+  double seconds; /* the whole run: its stages, attempts not kept, measuring */
   size_t elements, nodes;
   double *quality;  /* [elements] q of the result */
   int failed_faces; /* faces the linear mesher could not mesh */
@@ -245,8 +246,9 @@ typedef enum hoc_findings {
 } hoc_findings;
 
 /* Fill the report with the stages r of the result `final`: its size, its q
- * and the findings asked for (hoc_findings flags). */
+ * and the findings asked for (hoc_findings flags), and the run's seconds
+ * since t0 (hoc_pipeline_now at its start). */
 hoc_status hoc_report_finish(hoc_report *report, const hoc_stages *r, const hoc_mesh *final,
-                             int findings);
+                             int findings, double t0);
 
 #endif

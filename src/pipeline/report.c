@@ -126,6 +126,8 @@ size_t hoc_report_num_elements(const hoc_report *report) { return report ? repor
 
 size_t hoc_report_num_nodes(const hoc_report *report) { return report ? report->nodes : 0; }
 
+double hoc_report_seconds(const hoc_report *report) { return report ? report->seconds : 0; }
+
 const double *hoc_report_quality(const hoc_report *report) {
   return report ? report->quality : NULL;
 }
@@ -265,7 +267,7 @@ static hoc_status find_cusps(hoc_report *report, const hoc_stages *r, const hoc_
 }
 
 hoc_status hoc_report_finish(hoc_report *report, const hoc_stages *r, const hoc_mesh *final,
-                             int findings) {
+                             int findings, double t0) {
   report->r = *r;
   report->elements = hoc_mesh_num_elements(final);
   report->nodes = hoc_mesh_num_nodes(final);
@@ -276,6 +278,7 @@ hoc_status hoc_report_finish(hoc_report *report, const hoc_stages *r, const hoc_
     HOC_TRY(find_tangled(report, final, report->quality, optimized_stage(r),
                          !!(findings & HOC_FIND_FROM_CAD)));
   if (findings & HOC_FIND_CUSPS) HOC_TRY(find_cusps(report, r, final, report->quality));
+  report->seconds = hoc_pipeline_now() - t0;
   return HOC_OK;
 }
 
@@ -322,8 +325,8 @@ hoc_status hoc_report_json(const hoc_report *report, const hoc_report_files *fil
   }
   text_add(&t,
            "\n  ],\n  \"refinements\": %d,\n  \"remeshings\": %d,\n  \"nodes\": %zu,\n  "
-           "\"model_seconds\": %.6f,\n  \"write_seconds\": %.6f\n}\n",
-           r->refinements, r->remeshings, report->nodes, files->model_seconds,
+           "\"seconds\": %.6f,\n  \"model_seconds\": %.6f,\n  \"write_seconds\": %.6f\n}\n",
+           r->refinements, r->remeshings, report->nodes, report->seconds, files->model_seconds,
            files->write_seconds);
   return text_take(&t, json);
 }
