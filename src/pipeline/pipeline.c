@@ -239,13 +239,14 @@ hoc_status hoc_pipeline_raise(const hoc_run *run, const hoc_mesh *in, int order,
   face_quality(*out, qs, tangled, min);
   int n_flag = 0;
   for (int f = 0; f < nf; ++f) {
-    flag[f] = tangled[f] > 0 ||
-              min[f] < min[2 * nf + f] - HOC_PIPELINE_FOOT_GAIN * fabs(min[2 * nf + f]);
+    flag[f] =
+        tangled[f] > 0 || min[f] < min[2 * nf + f] - HOC_PIPELINE_FOOT_GAIN * fabs(min[2 * nf + f]);
     n_flag += flag[f];
   }
   if (!n_flag) goto done;
   HOC_TRY_GOTO(hoc_mesh_elevate_feet_from(in, *out, flag, &feet), done);
-  for (size_t e = 0; e < ne; ++e) elems[e] = flag[in->elem_face[e]];
+  for (size_t e = 0; e < ne; ++e)
+    elems[e] = flag[in->elem_face[e]];
   HOC_TRY_GOTO(hoc_mesh_measure_some(feet, measure, elems, qf), done);
   face_quality(feet, qf, tangled + nf, min + nf);
   int n_take = 0;

@@ -124,7 +124,7 @@ enum { HOC_REPORT_MAX_FINDINGS = 4 };
 struct hoc_report {
   const char *command; /* "mesh", "optimize" or "quality" */
   hoc_measure measure;
-  hoc_stages r; /* the result's stages */
+  hoc_stages r;   /* the result's stages */
   double seconds; /* the whole run: its stages, attempts not kept, measuring */
   size_t elements, nodes;
   double *quality;  /* [elements] q of the result */
