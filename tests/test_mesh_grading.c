@@ -22,6 +22,14 @@
 
 #define DATA HOC_SOURCE_DIR "/tests/data/"
 
+/* Distance from x to the segment a-b in the plane z = 0. */
+static double segment_distance(const double *x, const double *a, const double *b) {
+  double ab[2] = {b[0] - a[0], b[1] - a[1]}, ax[2] = {x[0] - a[0], x[1] - a[1]};
+  double t = (ab[0] * ax[0] + ab[1] * ax[1]) / (ab[0] * ab[0] + ab[1] * ab[1]);
+  t = t < 0 ? 0 : t > 1 ? 1 : t;
+  return hypot(ax[0] - t * ab[0], ax[1] - t * ab[1]);
+}
+
 /* Counts the notes of a linear mesh graded down to one curve. */
 static int on_event(void *user, const hoc_event *ev) {
   if (ev->kind == HOC_EVENT_NOTE && ev->message &&
@@ -79,14 +87,25 @@ int main(void) {
   const double far[3] = {5, 5, 0}, corner[3] = {0.0007, 9.9993, 0}, near[3] = {0.0507, 9.9993, 0};
   double h_far = hoc_linear_grading_size(g, far), h_corner = hoc_linear_grading_size(g, corner),
          h_near = hoc_linear_grading_size(g, near);
-  printf("sizes: %.6g far (max %.6g), %.6g on the short curve, %.6g at 0.05 from it\n", h_far,
-         hmax, h_corner, h_near);
+  printf("sizes: %.6g far (max %.6g), %.6g on the short curve, %.6g at 0.05 from it\n", h_far, hmax,
+         h_corner, h_near);
   /* the short curve is the segment a-b; near's foot on it is a */
   const double a[3] = {0.0014, 10, 0};
   double d = sqrt((near[0] - a[0]) * (near[0] - a[0]) + (near[1] - a[1]) * (near[1] - a[1]));
   CHECK(fabs(h_far - hmax) < 1e-12 * hmax);
   CHECK(fabs(h_corner - HOC_LINEAR_SHORT_SIZE * L) < 1e-12);
   CHECK(fabs(h_near - (HOC_LINEAR_SHORT_SIZE * L + HOC_LINEAR_GRADE * d)) < 1e-12);
+  /* and out to 0.9 of its reach ((hmax - 5 L) / 2) in three directions: the
+   * field's grid of segments (one lookup) misses none of them there */
+  const double b_end[3] = {0, 10 - 0.0014, 0}, dirs[3][2] = {{1, 0}, {0, -1}, {0.6, -0.8}};
+  for (int k = 0; k < 3; ++k) {
+    double r = 0.9 * (hmax - HOC_LINEAR_SHORT_SIZE * L) / HOC_LINEAR_GRADE;
+    const double x[3] = {a[0] + r * dirs[k][0], a[1] + r * dirs[k][1], 0};
+    double want = HOC_LINEAR_SHORT_SIZE * L + HOC_LINEAR_GRADE * segment_distance(x, a, b_end);
+    double got = hoc_linear_grading_size(g, x);
+    printf("size at %.4f from the short curve's end: %.6g (closed form %.6g)\n", r, got, want);
+    CHECK(fabs(got - want) < 1e-12 && got < hmax);
+  }
   /* hoc_mesh_model says so */
   hoc_mesh_options mo;
   hoc_mesh_options_default(&mo);

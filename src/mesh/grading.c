@@ -13,8 +13,8 @@
  * field gives both back: at each node of the first mesh the size gmsh's
  * sizing asked for there (2 pi / (n kappa) within [hmin, hmax], kappa the
  * largest curvature of the node's faces and curves, by differences of the
- * CAD's derivatives; at most the bound of a face meshed finer), linear in the first mesh's triangle at the point
- * (found from the nearest node), and within reach of a short curve
+ * CAD's derivatives; at most the bound of a face meshed finer), linear in the first mesh's triangle
+ * at the point (found from the nearest node), and within reach of a short curve
  * HOC_LINEAR_SHORT_SIZE x its length growing by HOC_LINEAR_GRADE per unit
  * of distance from it (mesh.h).
  * SPDX-License-Identifier: GPL-2.0-or-later */
@@ -37,9 +37,14 @@ struct hoc_linear_grading {
   size_t *end;    /* [n]: one past the last node of the cell of node i (at its first) */
   /* its triangles (sorted node indices) and each node's, CSR */
   size_t *tri, *adj_start, *adj;
-  /* the short curves' segments [n_seg][6] and their lengths */
+  /* the short curves' segments [n_seg][6] and their curves' lengths */
   size_t n_seg;
   double *seg, *seg_h;
+  /* the segments near each cell of side seg_cell (segment_grid): cell key
+   * -> its first place i in seg_list, seg_end[i] one past its last */
+  double seg_cell, seg_half; /* seg_half: the longest segment's half length */
+  hoc_hash seg_cells;
+  size_t *seg_list, *seg_end;
   double min_size;
   int n_curves; /* the short curves */
 };
@@ -96,7 +101,10 @@ void hoc_linear_grading_free(hoc_linear_grading **g) {
   free((*g)->adj);
   free((*g)->seg);
   free((*g)->seg_h);
+  free((*g)->seg_list);
+  free((*g)->seg_end);
   hoc_hash_free(&(*g)->cells);
+  hoc_hash_free(&(*g)->seg_cells);
   free(*g);
   *g = NULL;
 }
@@ -172,8 +180,10 @@ static hoc_status node_sizes(const hoc_mesh *lin, double hmin, double hmax, doub
   for (size_t s = 0; s < lin->n_slots; ++s) {
     double k = face_curvature(model, lin->slot_face[s], lin->slot_uv + 2 * s);
     size_t n = lin->slot_node[s];
-    if (k < 0) pole[n] = 1;
-    else if (k > h[n]) h[n] = k;
+    if (k < 0)
+      pole[n] = 1;
+    else if (k > h[n])
+      h[n] = k;
   }
   for (size_t l = 0; l < lin->n_lines; ++l)
     for (size_t e = 0; e < 2; ++e) {
@@ -275,9 +285,9 @@ static hoc_status node_grid(const hoc_mesh *lin, const double *h, hoc_linear_gra
   HOC_ALLOC_GOTO(order, nn + 1, done);
   for (size_t i = 0; i < nn; ++i) {
     const double *x = lin->xyz + 3 * i;
-    order[i].key = cell_key(cell_index(x[0], g->origin[0], g->cell),
-                            cell_index(x[1], g->origin[1], g->cell),
-                            cell_index(x[2], g->origin[2], g->cell));
+    order[i].key =
+        cell_key(cell_index(x[0], g->origin[0], g->cell), cell_index(x[1], g->origin[1], g->cell),
+                 cell_index(x[2], g->origin[2], g->cell));
     order[i].node = i;
   }
   qsort(order, nn, sizeof *order, by_key);
@@ -317,6 +327,59 @@ done:
   return status;
 }
 
+/* For each grid cell near a short curve, the segments that can lower a
+ * size there: a segment lowers the size below h only within (h -
+ * HOC_LINEAR_SHORT_SIZE L) / HOC_LINEAR_GRADE of it, the cell's side is
+ * that reach at the largest node size (plus half the longest segment), and
+ * each segment is listed in the 27 cells around its middle's, so one
+ * lookup finds them (a coarse mesh of a model with hundreds of short
+ * curves asks gmsh's size callback for sizes millions of times). */
+static hoc_status segment_grid(const hoc_model *model, const double *h, size_t nn,
+                               hoc_linear_grading *g) {
+  size_t ns = g->n_seg, m = 27 * ns;
+  hoc_status status = HOC_OK;
+  keyed *order = NULL;
+  double hmax = 0;
+  for (size_t i = 0; i < nn; ++i)
+    hmax = fmax(hmax, h[i]);
+  g->seg_half = 0;
+  for (size_t s = 0; s < ns; ++s)
+    g->seg_half = fmax(g->seg_half, 0.5 * hoc_dist3(g->seg + 6 * s, g->seg + 6 * s + 3));
+  g->seg_cell = fmax(hmax / HOC_LINEAR_GRADE + g->seg_half, 1e-9 * model->diagonal);
+  for (int d = 0; d < 3; ++d) {
+    double side = model->bbox[d + 3] - model->bbox[d];
+    if (side / g->seg_cell > CELL_MAX / 2) g->seg_cell = side / (CELL_MAX / 2);
+  }
+  HOC_ALLOC_GOTO(order, m + 1, done);
+  size_t n = 0;
+  for (size_t s = 0; s < ns; ++s) {
+    int64_t c[3];
+    for (int d = 0; d < 3; ++d)
+      c[d] =
+          cell_index(0.5 * (g->seg[6 * s + d] + g->seg[6 * s + 3 + d]), g->origin[d], g->seg_cell);
+    for (int64_t i = c[0] - 1; i <= c[0] + 1; ++i)
+      for (int64_t j = c[1] - 1; j <= c[1] + 1; ++j)
+        for (int64_t k = c[2] - 1; k <= c[2] + 1; ++k) {
+          if (i < 0 || j < 0 || k < 0 || i > CELL_MAX || j > CELL_MAX || k > CELL_MAX) continue;
+          order[n].key = cell_key(i, j, k);
+          order[n++].node = s;
+        }
+  }
+  qsort(order, n, sizeof *order, by_key);
+  HOC_ALLOC_GOTO(g->seg_list, n + 1, done);
+  HOC_ALLOC_GOTO(g->seg_end, n + 1, done);
+  HOC_TRY_GOTO(hoc_hash_init(&g->seg_cells, n / 4 + 16), done);
+  for (size_t i = 0, j; i < n; i = j) {
+    for (j = i; j < n && order[j].key == order[i].key; ++j)
+      g->seg_list[j] = order[j].node;
+    g->seg_end[i] = j;
+    HOC_TRY_GOTO(hoc_hash_insert(&g->seg_cells, order[i].key, i, NULL, NULL), done);
+  }
+done:
+  free(order);
+  return status;
+}
+
 hoc_status hoc_linear_grading_make(const hoc_mesh *lin, double ratio, double hmin, double hmax,
                                    double ncurv, const double *face_size,
                                    hoc_linear_grading **out) {
@@ -335,6 +398,7 @@ hoc_status hoc_linear_grading_make(const hoc_mesh *lin, double ratio, double hmi
   HOC_ALLOC_GOTO(h, lin->n_nodes + 1, done);
   HOC_TRY_GOTO(node_sizes(lin, hmin, hmax, ncurv, face_size, h), done);
   HOC_TRY_GOTO(node_grid(lin, h, g), done);
+  HOC_TRY_GOTO(segment_grid(lin->model, h, lin->n_nodes, g), done);
   *out = g;
   g = NULL;
 done:
@@ -361,11 +425,13 @@ static double background(const hoc_linear_grading *g, const double *x) {
     /* every node in a ring r is at least (r - 1) cells away */
     if (r > 0 && (double)(r - 1) * g->cell > sqrt(best)) break;
     for (int64_t i = c[0] - r; i <= c[0] + r; ++i)
-      for (int64_t j = c[1] - r; j <= c[1] + r; ++j)
-        for (int64_t k = c[2] - r; k <= c[2] + r; ++k) {
+      for (int64_t j = c[1] - r; j <= c[1] + r; ++j) {
+        /* only the ring's surface: inside its sides in i and j, its two
+         * cells in k */
+        int side = llabs(i - c[0]) == r || llabs(j - c[1]) == r;
+        int64_t step = side || r == 0 ? 1 : 2 * r;
+        for (int64_t k = c[2] - r; k <= c[2] + r; k += step) {
           if (i < 0 || j < 0 || k < 0 || i > CELL_MAX || j > CELL_MAX || k > CELL_MAX) continue;
-          /* only the ring's surface */
-          if (llabs(i - c[0]) != r && llabs(j - c[1]) != r && llabs(k - c[2]) != r) continue;
           size_t first = hoc_hash_get(&g->cells, cell_key(i, j, k));
           if (first == SIZE_MAX) continue;
           for (size_t n = first; n < g->end[first]; ++n) {
@@ -373,6 +439,7 @@ static double background(const hoc_linear_grading *g, const double *x) {
             if (d2 < best) best = d2, h = g->h[n], near = n;
           }
         }
+      }
     if (r > 64 && isfinite(best)) break; /* (far from every node: the nearest found) */
   }
   /* linear in the triangle around that node that holds x's projection best */
@@ -401,12 +468,29 @@ static double background(const hoc_linear_grading *g, const double *x) {
   return h;
 }
 
+/* The size segment s asks for at x. */
+static double graded_size(const hoc_linear_grading *g, size_t s, const double *x) {
+  return HOC_LINEAR_SHORT_SIZE * g->seg_h[s] +
+         HOC_LINEAR_GRADE * seg_dist(x, g->seg + 6 * s, g->seg + 6 * s + 3);
+}
+
 double hoc_linear_grading_size(const hoc_linear_grading *g, const double *x) {
   double h = background(g, x);
-  for (size_t s = 0; s < g->n_seg; ++s) {
-    double graded = HOC_LINEAR_SHORT_SIZE * g->seg_h[s] +
-                    HOC_LINEAR_GRADE * seg_dist(x, g->seg + 6 * s, g->seg + 6 * s + 3);
-    if (graded < h) h = graded;
+  /* only segments whose middle lies within reach can lower h: one of a
+   * curve of length L lowers it within (h - HOC_LINEAR_SHORT_SIZE L) /
+   * HOC_LINEAR_GRADE of itself, and L >= g->min_size */
+  double reach = (h - HOC_LINEAR_SHORT_SIZE * g->min_size) / HOC_LINEAR_GRADE + g->seg_half;
+  if (!(reach > 0)) return h;
+  if (!(reach <= g->seg_cell)) { /* (a size above the nodes' largest: every segment) */
+    for (size_t i = 0; i < g->n_seg; ++i)
+      h = fmin(h, graded_size(g, i, x));
+    return h;
   }
+  size_t first = hoc_hash_get(&g->seg_cells, cell_key(cell_index(x[0], g->origin[0], g->seg_cell),
+                                                      cell_index(x[1], g->origin[1], g->seg_cell),
+                                                      cell_index(x[2], g->origin[2], g->seg_cell)));
+  if (first == SIZE_MAX) return h;
+  for (size_t i = first; i < g->seg_end[first]; ++i)
+    h = fmin(h, graded_size(g, g->seg_list[i], x));
   return h;
 }
