@@ -574,7 +574,9 @@ typedef struct hoc_mesh_options {
                                are the linear mesh (e.g. another mesher's), used instead of
                                meshing; it is split where elements stay tangled, never
                                meshed again */
-  int optimize;           /**< 1 (default): untangle and smooth; 0: stop after raising */
+  int optimize;           /**< 1 (default): untangle and smooth (at order 1 only a
+                               linear mesh with tangled elements); 0: stop after
+                               raising */
   int fix_curves;         /**< hoc_optimize_options.fix_curves */
   int max_iterations;     /**< hoc_optimize_options.max_iterations (0: its default) */
   int refinements;        /**< where elements stay tangled: at most this many remeshings of
@@ -613,8 +615,9 @@ typedef struct hoc_report hoc_report;
  *  the new nodes at the feet of the straight elements' points on the
  *  surface instead: faces whose parametrisation varies within an element,
  *  as at a knot where a B-spline's derivative jumps), (3)
- *  optimised (hoc_mesh_optimize; unless options->optimize is 0, and from
- *  order 2). Where elements stay tangled: first (below order 6, or where
+ *  optimised (hoc_mesh_optimize; unless options->optimize is 0; at order
+ *  1 only if the linear mesh has tangled elements, which no split or
+ *  remeshing follows). Where elements stay tangled: first (below order 6, or where
  *  their faces fold) their split on a copy (as hoc_mesh_repair splits),
  *  kept if it leaves none tangled; else their faces meshed again with
  *  edges half as long and (unless options->size_min is set) a minimum

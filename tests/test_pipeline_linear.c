@@ -199,8 +199,10 @@ static void test_tangled_on_folds(void) {
     CHECK_OK(hoc_repair_tangled_on_folds(&run, lin, &all));
     printf("%s: %zu elements, %zu tangled, %zu across a fold, all on folded faces %d\n",
            k == 0 ? "folded square" : "plain square", ne, n_tangled, folds, all);
-    if (k == 0) CHECK(n_tangled > 0 && folds >= n_tangled && all == 1);
-    else CHECK(n_tangled == 0 && folds == 0 && all == 0);
+    if (k == 0)
+      CHECK(n_tangled > 0 && folds >= n_tangled && all == 1);
+    else
+      CHECK(n_tangled == 0 && folds == 0 && all == 0);
     free(tangled);
     hoc_mesh_destroy(&lin);
     hoc_model_destroy(&model);
@@ -239,7 +241,75 @@ static void test_bottle_turned_side(void) {
   hoc_model_destroy(&model);
 }
 
+/* Order 1 with triangles inverted on the CAD (which gmsh's algorithms can
+ * all leave, e.g. on t106_turbine_blade.step's face 2 at order 1): the
+ * linear mesh is untangled by the optimiser at p = 1; without
+ * optimisation, or with a valid linear mesh, the result is the linear
+ * mesh. The case: a 5 x 5 grid on a square, one interior node pushed
+ * across the opposite side of one of its triangles. */
+static void test_order1_untangled(void) {
+  hoc_model *model = NULL;
+  hoc_mesh *lin = NULL;
+  CHECK_OK(hoc_cad_create_analytic(HOC_ANALYTIC_PLANE, 1, 1, &model));
+  if (model) CHECK_OK(hoc_mesh_grid_linear(model, 5, 5, &lin));
+  if (!lin) {
+    hoc_model_destroy(&model);
+    return;
+  }
+  size_t e = 0;
+  int k = -1;
+  for (; e < lin->n_elems && k < 0; ++e)
+    for (int j = 0; j < 3 && k < 0; ++j)
+      if (lin->dim[lin->conn[3 * e + j]] == HOC_ON_FACE) k = j;
+  --e;
+  CHECK(k >= 0);
+  if (k >= 0) {
+    size_t i = lin->conn[3 * e + k];
+    const double *u = lin->elem_uv + 6 * e;
+    int a = (k + 1) % 3, b = (k + 2) % 3;
+    double d[2];
+    for (int c = 0; c < 2; ++c)
+      d[c] = 1.6 * (0.5 * (u[2 * a + c] + u[2 * b + c]) - u[2 * k + c]);
+    for (int c = 0; c < 2; ++c)
+      lin->param[2 * i + c] += d[c];
+    for (size_t f = 0; f < 3 * lin->n_elems; ++f)
+      if (lin->conn[f] == i)
+        for (int c = 0; c < 2; ++c)
+          lin->elem_uv[2 * f + c] += d[c];
+    for (size_t sl = 0; sl < lin->n_slots; ++sl)
+      if (lin->slot_node[sl] == i)
+        for (int c = 0; c < 2; ++c)
+          lin->slot_uv[2 * sl + c] = lin->param[2 * i + c];
+    hoc_mesh_update_xyz(lin);
+  }
+  for (int optimize = 0; optimize < 2; ++optimize) {
+    hoc_mesh_options o;
+    hoc_mesh_options_default(&o);
+    o.order = 1;
+    o.linear = lin;
+    o.optimize = optimize;
+    hoc_report *r = NULL;
+    CHECK_OK(hoc_mesh_model(model, &o, NULL, &r));
+    if (!r) continue;
+    size_t n = hoc_report_num_stages(r);
+    const hoc_stage *first = hoc_report_stage(r, 0), *last = hoc_report_stage(r, n - 1);
+    printf("order 1, %s: linear %zu tangled, result %zu (%zu stage(s))\n",
+           optimize ? "optimised" : "not optimised", first->stats.tangled, hoc_report_tangled(r),
+           n);
+    CHECK(first->stats.tangled > 0);
+    if (optimize)
+      CHECK(n == 2 && !strcmp(last->name, "optimized") && hoc_report_tangled(r) == 0 &&
+            last->stats.order == 1);
+    else
+      CHECK(n == 1 && hoc_report_tangled(r) == first->stats.tangled);
+    hoc_report_destroy(&r);
+  }
+  hoc_mesh_destroy(&lin);
+  hoc_model_destroy(&model);
+}
+
 int main(void) {
+  test_order1_untangled();
   test_tangled_on_folds();
   test_bottle_turned_side();
   test_blade();

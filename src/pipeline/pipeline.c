@@ -396,6 +396,14 @@ static hoc_status mesh_model_run(const hoc_run *run, hoc_model *model, model_mes
                    done);
       *final = m->ho;
     }
+    /* order 1: triangles inverted on the CAD that gmsh's algorithms all
+     * leave (see linear_mesh) are untangled by the optimiser at p = 1, in
+     * the faces' parameters; a valid linear mesh stays gmsh's */
+    if (o->optimize && o->order == 1 && hoc_stages_last(r)->stage.stats.tangled) {
+      HOC_TRY_GOTO(hoc_mesh_copy(m->lin, &m->ho), done);
+      HOC_TRY_GOTO(hoc_repair_optimize(run, r, "optimized", m->ho, NULL), done);
+      *final = m->ho;
+    }
     if (o->optimize && o->order > 1) {
       /* the raised mesh before optimisation, for pictures */
       if (o->keep_stages)
