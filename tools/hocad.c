@@ -598,11 +598,12 @@ static int cmd_mesh(int argc, char **argv) {
   if ((code = write_outputs(&o, final, q, out))) goto done;
   if ((code = write_json(&o, r, model_seconds, now() - t0, 1))) goto done;
   if (o.png || o.histogram) {
-    /* the stages side by side: linear | raised | optimized */
+    /* the stages side by side: linear | raised | optimized (at order 1,
+     * linear | optimized where the linear mesh was untangled) */
     const hoc_mesh *raised = hoc_report_raised(r);
     const hoc_mesh *meshes[3] = {hoc_report_linear(r), raised ? raised : final, final};
     const double *qs[3] = {NULL, raised ? NULL : q, q};
-    int n = mo->order == 1 ? 1 : raised ? 3 : 2;
+    int n = mo->order == 1 ? (hoc_report_num_stages(r) > 1 ? 2 : 1) : raised ? 3 : 2;
     const char *names[3] = {"linear", raised || !mo->optimize ? "raised" : "optimized",
                             "optimized"};
     char title[3][96];
