@@ -91,6 +91,24 @@ static int by_key(const void *a, const void *b) {
   return x->node < y->node ? -1 : x->node > y->node;
 }
 
+/* Whether cell (i, j, k) is in the grid. */
+static int in_grid(int64_t i, int64_t j, int64_t k) {
+  return i >= 0 && j >= 0 && k >= 0 && i <= CELL_MAX && j <= CELL_MAX && k <= CELL_MAX;
+}
+
+/* order[n], sorted by key, in cells: cells maps each key to the first
+ * place i of its run, end[i] is one past the run's last. */
+static hoc_status index_cells(const keyed *order, size_t n, hoc_hash *cells, size_t *end) {
+  HOC_TRY(hoc_hash_init(cells, n / 4 + 16));
+  for (size_t i = 0, j; i < n; i = j) {
+    for (j = i + 1; j < n && order[j].key == order[i].key; ++j) {
+    }
+    end[i] = j;
+    HOC_TRY(hoc_hash_insert(cells, order[i].key, i, NULL, NULL));
+  }
+  return HOC_OK;
+}
+
 void hoc_linear_grading_free(hoc_linear_grading **g) {
   if (!g || !*g) return;
   free((*g)->xyz);
@@ -313,13 +331,7 @@ static hoc_status node_grid(const hoc_mesh *lin, const double *h, hoc_linear_gra
     g->adj_start[i + 1] += g->adj_start[i];
   for (size_t i = 0; i < 3 * ne; ++i)
     g->adj[g->adj_start[g->tri[i]] + fill[g->tri[i]]++] = i / 3;
-  HOC_TRY_GOTO(hoc_hash_init(&g->cells, nn / 4 + 16), done);
-  for (size_t i = 0, j; i < nn; i = j) {
-    for (j = i + 1; j < nn && order[j].key == order[i].key; ++j) {
-    }
-    g->end[i] = j;
-    HOC_TRY_GOTO(hoc_hash_insert(&g->cells, order[i].key, i, NULL, NULL), done);
-  }
+  HOC_TRY_GOTO(index_cells(order, nn, &g->cells, g->end), done);
 done:
   free(order);
   free(rank);
@@ -360,7 +372,7 @@ static hoc_status segment_grid(const hoc_model *model, const double *h, size_t n
     for (int64_t i = c[0] - 1; i <= c[0] + 1; ++i)
       for (int64_t j = c[1] - 1; j <= c[1] + 1; ++j)
         for (int64_t k = c[2] - 1; k <= c[2] + 1; ++k) {
-          if (i < 0 || j < 0 || k < 0 || i > CELL_MAX || j > CELL_MAX || k > CELL_MAX) continue;
+          if (!in_grid(i, j, k)) continue;
           order[n].key = cell_key(i, j, k);
           order[n++].node = s;
         }
@@ -368,13 +380,9 @@ static hoc_status segment_grid(const hoc_model *model, const double *h, size_t n
   qsort(order, n, sizeof *order, by_key);
   HOC_ALLOC_GOTO(g->seg_list, n + 1, done);
   HOC_ALLOC_GOTO(g->seg_end, n + 1, done);
-  HOC_TRY_GOTO(hoc_hash_init(&g->seg_cells, n / 4 + 16), done);
-  for (size_t i = 0, j; i < n; i = j) {
-    for (j = i; j < n && order[j].key == order[i].key; ++j)
-      g->seg_list[j] = order[j].node;
-    g->seg_end[i] = j;
-    HOC_TRY_GOTO(hoc_hash_insert(&g->seg_cells, order[i].key, i, NULL, NULL), done);
-  }
+  for (size_t i = 0; i < n; ++i)
+    g->seg_list[i] = order[i].node;
+  HOC_TRY_GOTO(index_cells(order, n, &g->seg_cells, g->seg_end), done);
 done:
   free(order);
   return status;
@@ -431,7 +439,7 @@ static double background(const hoc_linear_grading *g, const double *x) {
         int side = llabs(i - c[0]) == r || llabs(j - c[1]) == r;
         int64_t step = side || r == 0 ? 1 : 2 * r;
         for (int64_t k = c[2] - r; k <= c[2] + r; k += step) {
-          if (i < 0 || j < 0 || k < 0 || i > CELL_MAX || j > CELL_MAX || k > CELL_MAX) continue;
+          if (!in_grid(i, j, k)) continue;
           size_t first = hoc_hash_get(&g->cells, cell_key(i, j, k));
           if (first == SIZE_MAX) continue;
           for (size_t n = first; n < g->end[first]; ++n) {
