@@ -127,6 +127,10 @@ typedef struct hoc_linear_options {
                                 length on each face and its boundary curves (0: none) */
   hoc_progress_fn progress;
   void *progress_user;
+  double mesher_timeout; /**< seconds gmsh's mesher may take (0: 300; < 0: no limit): if the
+                              whole mesh takes longer, each face is meshed alone within it
+                              and the faces that do not finish count as failed (the mesh's
+                              failed faces), as faces that crash gmsh do */
 } hoc_linear_options;
 
 /** Fill options with defaults (all "choose", order 1, no progress). */
@@ -597,6 +601,7 @@ typedef struct hoc_mesh_options {
                                finite differences (hoc_mesh_check_gradient, HOC_EVENT_CHECK) */
   hoc_event_fn event;     /**< NULL, or called on every event */
   void *event_user;       /**< passed to event */
+  double mesher_timeout;  /**< hoc_mesh_model: hoc_linear_options.mesher_timeout */
 } hoc_mesh_options;
 
 /** Fill options with the defaults: order 3, equispaced nodes, shape

@@ -29,6 +29,16 @@ ok "mesher crash: faces left out" "grep -q 'could not be meshed' err.txt"
 ok "mesher crash: the rest written" "[ -s spring.msh ] && grep -q '\$Elements' spring.msh"
 cat err.txt
 
+# a face gmsh's mesher does not finish (it inserts points for ever on the
+# wing's face): skipped after --mesher-timeout, the caps written (exit 4)
+"$hocad" mesh "$src/tests/data/wing_rounded_te.brep" --order 2 --mesher-timeout 2 -o wing.msh \
+  -q 2> err.txt
+rc=$?
+ok "mesher timeout: exit 4 (got $rc)" "[ $rc -eq 4 ]"
+ok "mesher timeout: says so" "grep -q 'faces 1; gmsh.s mesher did not finish 1 of them in 2 s' err.txt"
+ok "mesher timeout: the rest written" "[ -s wing.msh ] && grep -q '\$Elements' wing.msh"
+cat err.txt
+
 # Ctrl-C (to hocad alone) while the mesher's child runs: hocad exits 130,
 # its child ends with it (it dies with its parent), no output is written
 "$hocad" mesh "$src/tests/data/spring_helix.igs" --order 2 -o int.msh > log.txt 2> /dev/null &

@@ -58,6 +58,7 @@ expect 1 "size not a number" -- mesh "$model" --size abc
 expect 1 "size NaN" -- mesh "$model" --size nan
 expect 1 "size infinite" -- mesh "$model" --size inf
 expect 1 "curvature zero" -- mesh "$model" --curvature 0
+expect 1 "mesher timeout zero" -- mesh "$model" --mesher-timeout 0
 expect 1 "refinements negative" -- mesh "$model" --refinements -1
 expect 1 "refinements too many" -- mesh "$model" --refinements 11
 expect 1 "optimize refinements too many" -- optimize "$model" in.msh -o out.msh --refinements 11

@@ -5,14 +5,17 @@
  * working in the same process afterwards, also after OpenMP threads ran
  * (GNU libgomp's pool does not survive fork).
  * SPDX-License-Identifier: GPL-2.0-or-later */
+#include "cad/gmsh_util.h"
 #include "mesh/mesh.h"
 #include "test_util.h"
 
+#include <math.h>
 #include <omp.h>
 #include <signal.h>
 #include <string.h>
 #include <sys/time.h>
 #include <sys/wait.h>
+#include <time.h>
 #include <unistd.h>
 
 #define DATA HOC_SOURCE_DIR "/tests/data/"
@@ -83,6 +86,64 @@ static void test_mesher_crash(void) {
   hoc_model_destroy(&model);
 }
 
+/* A child that sends nothing: a read with an idle limit gives up after it
+ * and kills the child. */
+static int silent_child(void *arg, int fd) {
+  (void)arg, (void)fd;
+  pause();
+  return 0;
+}
+
+static double seconds(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static void test_child_idle_limit(void) {
+  hoc_child c;
+  hoc_child_end end;
+  CHECK_OK(hoc_child_start(&c, silent_child, NULL));
+  c.idle_limit = 0.3;
+  double t0 = seconds();
+  char byte;
+  CHECK(!hoc_child_read(&c, &byte, 1));
+  double waited = seconds() - t0;
+  CHECK(c.timed_out);
+  CHECK(waited >= 0.29);
+  hoc_child_finish(&c, 0, &end);
+  CHECK(end.timed_out && end.signal == SIGKILL);
+  CHECK(no_children());
+}
+
+/* gmsh's frontal-Delaunay algorithm goes on inserting points on a lofted
+ * wing's face (its rounded trailing edge) with curvature sizing: with a
+ * time limit, that face counts as failed and the caps are meshed. */
+static void test_mesher_timeout(void) {
+  hoc_model *model = NULL;
+  CHECK_OK(hoc_model_open(DATA "wing_rounded_te.brep", &model));
+  if (!model) return;
+  hoc_linear_options o;
+  hoc_linear_options_default(&o);
+  o.order = 2;
+  o.mesher_timeout = NAN;
+  hoc_mesh *m = NULL;
+  CHECK_STATUS(hoc_mesh_generate_linear(model, &o, &m), HOC_ERR_ARGUMENT);
+  o.mesher_timeout = 2;
+  CHECK_OK(hoc_mesh_generate_linear(model, &o, &m));
+  CHECK(no_children());
+  if (m) {
+    printf("wing: %zu triangles, %d face(s) left out (%d not finished in %g s): face %d\n",
+           hoc_mesh_num_elements(m), hoc_mesh_num_failed_faces(m), m->timed_out_faces,
+           m->mesher_timeout, hoc_mesh_failed_face_tag(m, 0));
+    CHECK(hoc_mesh_num_failed_faces(m) == 1 && m->timed_out_faces == 1);
+    CHECK(hoc_mesh_failed_face_tag(m, 0) == 1);
+    CHECK(hoc_mesh_num_elements(m) > 0);
+  }
+  hoc_mesh_destroy(&m);
+  hoc_model_destroy(&model);
+}
+
 /* Every signal disposition of this process, to compare before and after. */
 enum { N_SIGNALS = 32 };
 static void dispositions(struct sigaction *sa) {
@@ -145,6 +206,8 @@ int main(void) {
 
   test_import_crash();
   test_mesher_crash();
+  test_child_idle_limit();
+  test_mesher_timeout();
 
   /* the library still works in this process, and makes the same mesh */
   CHECK_OK(hoc_model_open(HOC_MODELS_DIR "/gmsh_t20_component8.step", &model));

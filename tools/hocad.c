@@ -180,6 +180,8 @@ static const char *usage_mesh =
     "  --size-min H         minimum edge length (default: size / 10)\n"
     "  --curvature N        elements per 2*pi of curvature radius (default 12 for\n"
     "                       order 1, 8 above: curved elements follow the surface)\n"
+    "  --mesher-timeout S   seconds gmsh may take to mesh (default 300), then each\n"
+    "                       face alone: the faces it does not finish are skipped\n"
     "  --nodes SET          equispaced | fekete | warp-blend (default equispaced);\n"
     "                       files always hold equispaced nodes\n"
     "  --measure M          shape | oddy (default shape)\n"
@@ -338,6 +340,9 @@ static int parse(int argc, char **argv, options *o, const char **pos, int max_po
         error_line("--curvature expects at most 1000 elements per 2*pi, got '%s'", v);
         return 0;
       }
+    } else if (mesh && VALUE("--mesher-timeout")) {
+      if (!parsed(hoc_cli_parse_positive("--mesher-timeout", v, &o->pipe.mesher_timeout)))
+        return 0;
     } else if (mesh && VALUE("--nodes")) {
       if (!parsed(hoc_cli_parse_nodeset("--nodes", v, &o->pipe.nodeset))) return 0;
     } else if (mesh && VALUE("--linear")) {

@@ -80,6 +80,7 @@ class LinearOptions(Structure):
         ("face_size", POINTER(c_double)),
         ("progress", ProgressFn),
         ("progress_user", c_void_p),
+        ("mesher_timeout", c_double),
     ]
 
 
@@ -196,6 +197,7 @@ class MeshOptions(Structure):
         ("check_gradient", c_int),
         ("event", EventFn),
         ("event_user", c_void_p),
+        ("mesher_timeout", c_double),
     ]
 
 

@@ -234,6 +234,7 @@ _MESH_OPTIONS = {
     "size": ("size", _real),
     "size_min": ("size_min", _real),
     "curvature": ("curvature", _real),
+    "mesher_timeout": ("mesher_timeout", _real),
     "optimize": ("optimize", _flag),
     "fix_curves": ("fix_curves", _flag),
     "max_iterations": ("max_iterations", _int),
@@ -398,7 +399,8 @@ class Model(_Handle):
         Keyword arguments (hoc_mesh_options; unset ones keep its defaults):
             order (int, 1..15, default 3), nodes ("equispaced", "fekete",
             "warp-blend"), measure ("shape", "oddy"), size, size_min,
-            curvature (floats, 0: chosen), optimize (bool, default True),
+            curvature (floats, 0: chosen), mesher_timeout (seconds gmsh's
+            mesher may take, 0: 300, < 0: no limit), optimize (bool, default True),
             fix_curves (bool), max_iterations (int, 0: default),
             refinements (int, -1: default), equispaced (bool: convert the
             result to equispaced nodes), keep_stages (bool: the report's

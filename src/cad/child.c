@@ -30,6 +30,8 @@
 #include <ctype.h>
 #include <errno.h>
 #include <fcntl.h>
+#include <math.h>
+#include <poll.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -37,6 +39,7 @@
 #include <sys/prctl.h>
 #include <sys/types.h>
 #include <sys/wait.h>
+#include <time.h>
 #include <unistd.h>
 
 const char *hoc_signal_name(int sig) {
@@ -78,6 +81,8 @@ hoc_status hoc_child_start(hoc_child *c, hoc_child_fn fn, void *arg) {
   c->pid = -1;
   c->fd = -1;
   c->sink = NULL;
+  c->idle_limit = 0;
+  c->timed_out = 0;
   int p[2];
   if (pipe(p) != 0)
     return HOC_ERROR(HOC_ERR_INTERNAL, "cannot make a pipe to a child process: %s",
@@ -126,9 +131,37 @@ hoc_status hoc_child_start(hoc_child *c, hoc_child_fn fn, void *arg) {
   return HOC_OK;
 }
 
+static double now(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* Waits until the child's pipe has data or is closed: 1, or 0 (the child
+ * killed) once c->idle_limit seconds passed without either. */
+static int wait_readable(hoc_child *c) {
+  if (!(c->idle_limit > 0)) return 1;
+  double end = now() + c->idle_limit;
+  for (;;) {
+    double left = end - now();
+    if (left > 0) {
+      struct pollfd pfd = {c->fd, POLLIN, 0};
+      int r = poll(&pfd, 1, (int)fmin(ceil(1e3 * left), 1e9));
+      if (r > 0) return 1;
+      if (r < 0 && errno != EINTR) return 1; /* (the read reports the error) */
+      if (r < 0) continue;
+    }
+    if (now() < end) continue;
+    if (c->pid > 0) kill(c->pid, SIGKILL);
+    c->timed_out = 1;
+    return 0;
+  }
+}
+
 int hoc_child_read(hoc_child *c, void *buf, size_t n) {
   unsigned char *b = buf;
   while (n) {
+    if (!wait_readable(c)) return 0;
     ssize_t r = read(c->fd, b, n);
     if (r < 0 && errno == EINTR) continue;
     if (r <= 0) return 0;
@@ -183,6 +216,7 @@ void hoc_first_error_line(FILE *f, char *first_error, size_t size) {
 void hoc_child_finish(hoc_child *c, int kill_it, hoc_child_end *end) {
   end->exit_code = -1;
   end->signal = 0;
+  end->timed_out = c->timed_out;
   end->first_error[0] = '\0';
   if (c->pid > 0) {
     if (kill_it) kill(c->pid, SIGKILL);

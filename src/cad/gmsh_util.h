@@ -45,6 +45,9 @@ typedef struct hoc_child {
   pid_t pid;
   int fd;
   FILE *sink;
+  double idle_limit; /* > 0: seconds a read waits for the child's next byte
+                        before the child is killed (hoc_child_start sets 0) */
+  int timed_out;     /* a read waited idle_limit: the child was killed */
 } hoc_child;
 
 /** What the child runs: writes its results to fd (hoc_child_write) and
@@ -57,7 +60,8 @@ enum { HOC_CHILD_ORPHAN = 125 };
 /** Fork a child that runs fn(arg, fd) and exits with its value. */
 hoc_status hoc_child_start(hoc_child *c, hoc_child_fn fn, void *arg);
 
-/** Read exactly n bytes the child wrote: 1, or 0 if it ended before. */
+/** Read exactly n bytes the child wrote: 1, or 0 if it ended before (or
+ *  sent nothing for c->idle_limit seconds: it is then killed, c->timed_out). */
 int hoc_child_read(hoc_child *c, void *buf, size_t n);
 
 /** In the child: write n bytes to the parent: 1, or 0 on failure. */
@@ -68,6 +72,7 @@ int hoc_child_write(int fd, const void *buf, size_t n);
  *  first error line it printed. */
 typedef struct hoc_child_end {
   int exit_code, signal;
+  int timed_out; /* hoc_child_read killed it (signal SIGKILL): idle_limit passed */
   char first_error[256];
 } hoc_child_end;
 

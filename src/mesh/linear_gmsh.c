@@ -103,7 +103,18 @@ typedef struct mesh_job {
   const int *algorithm; /* NULL, or [n_faces] gmsh's 2D algorithm per face (0: its default) */
   int isolate; /* find the faces that crash gmsh first, and leave them out */
   int face;    /* a probe of one face (index): does meshing it alone crash? */
+  double timeout; /* > 0: seconds a face probe may take (then it counts as failed) */
 } mesh_job;
+
+/* A face probe's report of a face gmsh did not finish meshing in time
+ * (other nonzero reports are the signal that ended the probe, or 255). */
+enum { FACE_TIMED_OUT = 254 };
+
+/* While the faces are probed one by one, the parent waits for each face's
+ * report up to PROBE_SLACK times the probe's limit plus PROBE_SLACK_SECONDS
+ * (the child meshes the curves before the first probe, and forks each). */
+#define PROBE_SLACK 2.0
+#define PROBE_SLACK_SECONDS 10.0
 
 static int send_u64(int fd, uint64_t v) { return hoc_child_write(fd, &v, sizeof v); }
 
@@ -211,7 +222,7 @@ static int mesh_child(void *arg, int fd) {
     if (!keep) return 1;
     int sent = 1;
     for (int f = 0; f < model->n_faces && sent; ++f) {
-      mesh_job probe = {model, job->algorithm, 0, f};
+      mesh_job probe = {model, job->algorithm, 0, f, 0};
       hoc_child c;
       hoc_child_end end;
       uint64_t ok = 1;
@@ -219,10 +230,12 @@ static int mesh_child(void *arg, int fd) {
         sent = 0;
         break;
       }
+      c.idle_limit = job->timeout;
       int got = hoc_child_read(&c, &ok, sizeof ok);
       hoc_child_finish(&c, 0, &end);
       keep[f] = got && ok == 0;
-      sent = send_u64(fd, keep[f] ? 0 : (uint64_t)(end.signal > 0 ? end.signal : 255));
+      uint64_t why = end.timed_out ? FACE_TIMED_OUT : end.signal > 0 ? (uint64_t)end.signal : 255;
+      sent = send_u64(fd, keep[f] ? 0 : why);
     }
     if (sent) mesh_only(model, keep);
     free(keep); /* a leak checker looks at the child too */
@@ -430,13 +443,16 @@ typedef enum run_outcome {
  * child first finds the faces that crash gmsh: crashed[f] receives the
  * signal that ended face f's probe (0: none), *probed how many faces it
  * reported before it ended. */
-static run_outcome run_mesher(const hoc_model *model, const int *algorithm, unsigned char *crashed,
-                              int *probed, linear_parts *parts, hoc_status *error,
-                              hoc_child_end *end) {
-  mesh_job job = {model, algorithm, crashed != NULL, -1};
+static run_outcome run_mesher(const hoc_model *model, const int *algorithm, double timeout,
+                              unsigned char *crashed, int *probed, linear_parts *parts,
+                              hoc_status *error, hoc_child_end *end) {
+  mesh_job job = {model, algorithm, crashed != NULL, -1, timeout};
   hoc_child child;
   *error = hoc_child_start(&child, mesh_child, &job);
   if (*error != HOC_OK) return RUN_FAILED;
+  /* the whole mesh within timeout; each face probe within it (the child
+   * ends the probe), then the faces that passed without a limit */
+  if (timeout > 0) child.idle_limit = crashed ? PROBE_SLACK * timeout + PROBE_SLACK_SECONDS : timeout;
   reader r = {&child, 0};
   hoc_status st = HOC_OK;
   for (int f = 0; crashed && f < model->n_faces && st == HOC_OK; ++f) {
@@ -447,6 +463,7 @@ static run_outcome run_mesher(const hoc_model *model, const int *algorithm, unsi
       *probed = f + 1;
     }
   }
+  if (crashed) child.idle_limit = 0;
   uint64_t head = 0;
   if (st == HOC_OK) st = read_u64(&r, &head);
   int gmsh_error = st == HOC_OK && head == 1;
@@ -467,7 +484,11 @@ static run_outcome run_mesher(const hoc_model *model, const int *algorithm, unsi
 }
 
 /* Error of a run that a signal ended, with what it was doing. */
-static hoc_status crash_error(int sig, const char *first_error, const char *doing) {
+static hoc_status crash_error(int sig, const char *first_error, const char *doing,
+                              double timeout) {
+  if (sig == FACE_TIMED_OUT)
+    return HOC_ERROR(HOC_ERR_MESH, "gmsh's mesher did not finish in %g s (--mesher-timeout) %s",
+                     timeout, doing);
   if (hoc_signal_is_interrupt(sig))
     return HOC_ERROR(HOC_ERR_INTERRUPTED, "interrupted (%s) while meshing", hoc_signal_name(sig));
   return HOC_ERROR(HOC_ERR_MESH, "gmsh's mesher %s (%s) %s%s%s",
@@ -488,6 +509,7 @@ static hoc_status generate_once(hoc_model *model, const hoc_linear_options *opti
             "mesh size must be a positive number");
   HOC_CHECK(isfinite(o.size_min) && o.size_min >= 0, HOC_ERR_ARGUMENT,
             "minimum mesh size must be a positive number");
+  HOC_CHECK(!isnan(o.mesher_timeout), HOC_ERR_ARGUMENT, "mesher timeout must be a number");
   HOC_CHECK(isfinite(o.curvature) && o.curvature >= 0 && o.curvature <= 1000, HOC_ERR_ARGUMENT,
             "curvature elements per 2 pi must be in 0..1000");
   HOC_CHECK(o.order >= 1 && o.order <= HOC_MAX_ORDER, HOC_ERR_ARGUMENT,
@@ -519,9 +541,14 @@ static hoc_status generate_once(hoc_model *model, const hoc_linear_options *opti
   hoc_status status = HOC_OK, err;
   hoc_child_end end;
   unsigned char *crashed = NULL;
-  run_outcome run = run_mesher(model, algorithm, NULL, NULL, &p, &err, &end);
+  int n_timed_out = 0;
+  double timeout = o.mesher_timeout < 0 ? 0 : o.mesher_timeout > 0 ? o.mesher_timeout
+                                                                   : HOC_MESHER_TIMEOUT;
+  run_outcome run = run_mesher(model, algorithm, timeout, NULL, NULL, &p, &err, &end);
+  if (run == RUN_CRASHED && end.timed_out) end.signal = FACE_TIMED_OUT;
   if (run == RUN_CRASHED && !hoc_signal_is_interrupt(end.signal) && model->n_faces > 1) {
-    /* mesh the faces that do not crash gmsh; the others count as failed */
+    /* mesh the faces that neither crash gmsh nor keep it from finishing
+     * in time; the others count as failed */
     hoc_child_end first = end;
     int probed = 0, n_crashed = 0;
     linear_parts_free(&p);
@@ -530,26 +557,28 @@ static hoc_status generate_once(hoc_model *model, const hoc_linear_options *opti
       status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
       goto done;
     }
-    run = run_mesher(model, algorithm, crashed, &probed, &p, &err, &end);
+    run = run_mesher(model, algorithm, timeout, crashed, &probed, &p, &err, &end);
+    if (run == RUN_CRASHED && end.timed_out) end.signal = FACE_TIMED_OUT;
     for (int f = 0; f < probed; ++f) {
+      n_timed_out += crashed[f] == FACE_TIMED_OUT;
       if (crashed[f] && hoc_signal_is_interrupt(crashed[f])) {
-        status = crash_error(crashed[f], "", "");
+        status = crash_error(crashed[f], "", "", timeout);
         goto done;
       }
       n_crashed += crashed[f] != 0;
     }
     if (run == RUN_CRASHED && probed == 0) {
-      status = crash_error(end.signal, end.first_error, "meshing the curves");
+      status = crash_error(end.signal, end.first_error, "meshing the curves", timeout);
       goto done;
     }
     if (probed == model->n_faces && n_crashed == model->n_faces) {
-      status = crash_error(first.signal, first.first_error, "on every face");
+      status = crash_error(first.signal, first.first_error, "on every face", timeout);
       goto done;
     }
     if (run == RUN_CRASHED) {
       status = crash_error(end.signal, end.first_error,
                            probed < model->n_faces ? "while trying the faces one by one"
-                                                   : "without the faces that crash it alone");
+                                                   : "without the faces that crash it alone", timeout);
       goto done;
     }
   }
@@ -560,7 +589,7 @@ static hoc_status generate_once(hoc_model *model, const hoc_linear_options *opti
                        end.first_error[0] ? end.first_error : hoc_last_error());
     goto done;
   case RUN_CRASHED:
-    status = crash_error(end.signal, end.first_error, "meshing the surfaces");
+    status = crash_error(end.signal, end.first_error, "meshing the surfaces", timeout);
     goto done;
   case RUN_FAILED: status = err; goto done;
   }
@@ -591,6 +620,8 @@ static hoc_status generate_once(hoc_model *model, const hoc_linear_options *opti
   HOC_TRY_GOTO(hoc_mesh_assemble(model, &src, 1e-6, mesh), done);
   (*mesh)->n_failed_faces = p.n_failed;
   (*mesh)->failed_faces = p.failed;
+  (*mesh)->timed_out_faces = n_timed_out;
+  (*mesh)->mesher_timeout = timeout;
   p.failed = NULL;
 done:
   linear_parts_free(&p);

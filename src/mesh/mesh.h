@@ -60,6 +60,9 @@ struct hoc_mesh {
   double ungraded_min_q;
   int n_failed_faces;
   int *failed_faces;        /* [n_failed_faces] face indices the mesher could not mesh */
+  int timed_out_faces;      /* how many of them gmsh did not finish meshing in
+                               mesher_timeout seconds (hoc_linear_options) */
+  double mesher_timeout;
   double off_cad;           /* largest distance of a given node position from its entity
                                (nonzero only for meshes kept as read) */
   double face_gap;          /* largest distance between a curve or vertex node and its
@@ -341,6 +344,14 @@ hoc_status hoc_mesh_generate_linear_with(hoc_model *model, const hoc_linear_opti
  * face remeshed with the minimum lowered to 0.46: 207 triangles from
  * gmsh, 348 557 graded; tests/test_pipeline_remesh_first.c). */
 #define HOC_LINEAR_GRADED_GROWTH 4
+
+/* Seconds gmsh's mesher may take, by default (hoc_linear_options.
+ * mesher_timeout): the whole linear mesh, then each face alone. gmsh's
+ * frontal and Delaunay algorithms can go on inserting points forever on a
+ * face (a lofted wing whose rounded trailing edge is a hundredth of its
+ * chord, with curvature sizing: tests/test_mesh_gmsh.c); the largest
+ * linear meshes of the corpus take under a minute. */
+#define HOC_MESHER_TIMEOUT 300.0
 
 /* hoc_mesh_generate_linear without that grading: gmsh's mesh at the
  * options' sizes alone (tests take it as the mesh gmsh makes). */

@@ -114,9 +114,14 @@ static hoc_status warn_failed_faces(const hoc_run *run, const hoc_mesh *lin) {
   for (int i = 0; i < nfail && i < 30 && len < sizeof faces; ++i)
     len +=
         (size_t)snprintf(faces + len, sizeof faces - len, " %d", hoc_mesh_failed_face_tag(lin, i));
+  char slow[160] = "";
+  if (lin->timed_out_faces)
+    snprintf(slow, sizeof slow,
+             "; gmsh's mesher did not finish %d of them in %g s (--mesher-timeout)",
+             lin->timed_out_faces, lin->mesher_timeout);
   return hoc_run_event(run, HOC_EVENT_WARNING,
-                       "%d face(s) could not be meshed (the rest is processed): faces%s%s", nfail,
-                       faces, nfail > 30 ? " ..." : "");
+                       "%d face(s) could not be meshed (the rest is processed): faces%s%s%s",
+                       nfail, faces, nfail > 30 ? " ..." : "", slow);
 }
 
 /* A linear mesh graded down to short CAD curves (mesh/grading.c). */
@@ -370,6 +375,7 @@ static hoc_status mesh_model_run(const hoc_run *run, hoc_model *model, model_mes
   lo.size_min = o->size_min;
   lo.curvature = o->curvature;
   lo.order = o->order;
+  lo.mesher_timeout = o->mesher_timeout;
   /* the minimum size before a remeshing lowered it, and the elements of
    * the linear mesh before that remeshing */
   double unlowered_min = lo.size_min;
