@@ -116,9 +116,9 @@ static void test_child_idle_limit(void) {
   CHECK(no_children());
 }
 
-/* gmsh's frontal-Delaunay algorithm goes on inserting points on a lofted
- * wing's face (its rounded trailing edge) with curvature sizing: with a
- * time limit, that face counts as failed and the caps are meshed. */
+/* gmsh's mesher goes on inserting points on the lofted fin's face (its
+ * rounded trailing edge) without end: with a time limit, that face counts
+ * as failed and the caps are meshed. */
 static void test_mesher_timeout(void) {
   hoc_model *model = NULL;
   CHECK_OK(hoc_model_open(DATA "wing_rounded_te.brep", &model));

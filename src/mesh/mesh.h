@@ -347,10 +347,11 @@ hoc_status hoc_mesh_generate_linear_with(hoc_model *model, const hoc_linear_opti
 
 /* Seconds gmsh's mesher may take, by default (hoc_linear_options.
  * mesher_timeout): the whole linear mesh, then each face alone. gmsh's
- * frontal and Delaunay algorithms can go on inserting points forever on a
- * face (a lofted wing whose rounded trailing edge is a hundredth of its
- * chord, with curvature sizing: tests/test_mesh_gmsh.c); the largest
- * linear meshes of the corpus take under a minute. */
+ * mesher can go on inserting points for ever on a face (a lofted fin whose
+ * rounded trailing edge has a radius of about a hundredth of its chord,
+ * with each of its algorithms, curvature sizing or not: docs/kernel.md,
+ * tests/test_cad_crash.c); the largest linear meshes of the corpus take
+ * under 20 s. */
 #define HOC_MESHER_TIMEOUT 300.0
 
 /* hoc_mesh_generate_linear without that grading: gmsh's mesh at the
