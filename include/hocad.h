@@ -98,7 +98,11 @@ int hoc_model_num_faces(const hoc_model *model);
 int hoc_model_num_curves(const hoc_model *model);
 int hoc_model_num_vertices(const hoc_model *model);
 
-/** Axis-aligned bounding box [xmin, ymin, zmin, xmax, ymax, zmax]. */
+/** Axis-aligned bounding box [xmin, ymin, zmin, xmax, ymax, zmax] of the
+ *  faces, their curves and vertices, and the volumes (the kernel's boxes,
+ *  widened by tolerances): vertices and curves that bound no face do not
+ *  count. Its diagonal is the model's length scale (default sizes,
+ *  tolerances). */
 void hoc_model_bbox(const hoc_model *model, double bbox[6]);
 
 /** The model's own tolerance, measured: the largest distance between a

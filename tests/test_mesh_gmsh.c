@@ -697,7 +697,28 @@ static void test_curve_on_plane(void) {
   hoc_model_destroy(&model);
 }
 
+/* A file's vertices and curves that bound no face (a point at x = 100, a
+ * line from y = 50 to 60 beside a unit square face) do not set the
+ * model's size: the face's box does (widened by OpenCASCADE's 1e-7), and
+ * the default mesh has edges of about its diagonal / 20. */
+static void test_free_entities(void) {
+  hoc_model *model = NULL;
+  CHECK_OK(hoc_model_open(HOC_SOURCE_DIR "/tests/data/square_free_entities.brep", &model));
+  if (!model) return;
+  printf("square with free entities: diagonal %.9g\n", model->diagonal);
+  CHECK(fabs(model->diagonal - sqrt(2.0)) < 1e-6);
+  hoc_linear_options o;
+  hoc_linear_options_default(&o);
+  hoc_mesh *m = NULL;
+  CHECK_OK(hoc_mesh_generate_linear(model, &o, &m));
+  /* about 2 (20 / sqrt 2)^2 = 400 triangles; 2 at the points' size */
+  if (m) CHECK(m->n_elems > 200);
+  hoc_mesh_destroy(&m);
+  hoc_model_destroy(&model);
+}
+
 int main(void) {
+  test_free_entities();
   test_split_on_curves();
   test_two_faces_one_edge();
   test_refine_faces();

@@ -22,6 +22,7 @@
 
 #include <ctype.h>
 #include <errno.h>
+#include <math.h>
 #include <pthread.h>
 #include <signal.h>
 #include <stdint.h>
@@ -438,6 +439,52 @@ static void get_bbox(int dim, int tag, double *bb) {
     for (int k = 0; k < 6; ++k) bb[k] = 0;
 }
 
+/* Widens box bb (lo, hi) to hold box add. */
+static void add_box(double *bb, const double *add, int first) {
+  for (int k = 0; k < 3; ++k) {
+    bb[k] = first ? add[k] : fmin(bb[k], add[k]);
+    bb[k + 3] = first ? add[k + 3] : fmax(bb[k + 3], add[k + 3]);
+  }
+}
+
+/* bb: the box of m's faces, of the curves that bound them, of those
+ * curves' vertices and of the volumes. */
+static hoc_status faces_box(const hoc_model *m, double *bb) {
+  unsigned char *used = hoc_calloc((size_t)m->n_curves + (size_t)m->n_vertices + 1, 1);
+  HOC_CHECK(used, HOC_ERR_MEMORY, "out of memory");
+  unsigned char *vused = used + m->n_curves;
+  for (int i = 0; i < m->n_faces; ++i) {
+    const hoc_cad_face *f = &m->faces[i];
+    add_box(bb, f->bbox, i == 0);
+    for (int k = 0; k < f->n_curves; ++k)
+      for (int c = 0; c < m->n_curves; ++c)
+        if (m->curves[c].tag == abs(f->curves[k])) used[c] = 1;
+  }
+  for (int c = 0; c < m->n_curves; ++c) {
+    if (!used[c]) continue;
+    add_box(bb, m->curves[c].bbox, 0);
+    if (m->curves[c].v0 >= 0) vused[m->curves[c].v0] = 1;
+    if (m->curves[c].v1 >= 0) vused[m->curves[c].v1] = 1;
+  }
+  for (int v = 0; v < m->n_vertices; ++v) {
+    if (!vused[v]) continue;
+    double vb[6];
+    get_bbox(0, m->vertices[v].tag, vb);
+    add_box(bb, vb, 0);
+  }
+  free(used);
+  int *vol = NULL;
+  size_t nvol = 0;
+  HOC_TRY(get_entities(3, &vol, &nvol));
+  for (size_t i = 0; i < nvol; ++i) {
+    double vb[6];
+    get_bbox(3, vol[i], vb);
+    add_box(bb, vb, 0);
+  }
+  free(vol);
+  return HOC_OK;
+}
+
 static hoc_status fill_model(hoc_model *m, const int *ftags, const int *ctags, const int *vtags) {
   int ierr = 0;
   for (int i = 0; i < m->n_vertices; ++i) {
@@ -486,7 +533,13 @@ static hoc_status fill_model(hoc_model *m, const int *ftags, const int *ctags, c
     if (!ierr && s) snprintf(f->name, sizeof f->name, "%s", s);
     gmshFree(s);
   }
+  /* the box of the faces and of the curves and vertices around them (the
+   * kernel's boxes, each widened by its entity's tolerance): a file may
+   * keep vertices and curves that bound no face (construction points, the
+   * sections of a loft, annotations) anywhere, and hocad meshes the faces
+   * (a model without faces is refused later) */
   get_bbox(-1, -1, m->bbox);
+  if (m->n_faces) HOC_TRY(faces_box(m, m->bbox));
   return HOC_OK;
 }
 
