@@ -2,7 +2,8 @@
 """Models no one tuned hocad to, made with gmsh's OpenCASCADE kernel, for
 bench/corpus.sh: shapes of the classes real models have (fillets, trimmed
 B-spline faces, poles on revolved profiles and cones, lofted blades, swept
-pipes, booleans with many small faces) in STEP and BREP.
+pipes, booleans with many small faces, assemblies of overlapping solids, a
+wing-body in metres, open surfaces) in STEP and BREP.
 
 usage: /usr/bin/python3 bench/synthetic_models.py DIR
   then: bench/corpus.sh DIR/*.step DIR/*.brep
@@ -172,6 +173,109 @@ def sphere_hole(occ):
     occ.cut([(3, s)], [(3, c)])
 
 
+def airfoil(occ, x0, chord, station, thick, vertical, lift=0.0):
+    """A closed wire of two splines through a NACA-like 00xx profile of this
+    chord, sharp at its trailing edge: in the plane z = station (a fin,
+    vertical) or y = station (a wing, raised by lift)."""
+    def point(x, y):
+        if vertical:
+            return occ.addPoint(x0 + x, y, station)
+        return occ.addPoint(x0 + x, station, lift + y)
+
+    def half(s):
+        return 5 * thick * chord * (0.2969 * s - 0.126 * s * s - 0.3516 * s**4
+                                    + 0.2843 * s**6 - 0.1036 * s**8)
+    n = 12
+    te, le = point(chord, 0.0), point(0.0, 0.0)
+    upper = [te] + [point(chord * (1 - i / n)**2, half(1 - i / n)) for i in range(1, n)] + [le]
+    lower = [le] + [point(chord * (i / n)**2, -half(i / n)) for i in range(1, n)] + [te]
+    return occ.addWire([occ.addSpline(upper), occ.addSpline(lower)])
+
+
+def lofted_wing(occ, x0, span, chord, sweep, lift=0.0, vertical=False, thick=0.12):
+    """A wing (or a fin) lofted through four sections tapering to 40%."""
+    wires = []
+    for k in range(4):
+        f = k / 3
+        station = lift + span * f if vertical else span * f
+        wires.append(airfoil(occ, x0 + sweep * f, chord * (1 - 0.6 * f), station, thick, vertical,
+                             lift + 0.05 * span * f))
+    return occ.addThruSections(wires, makeSolid=True)
+
+
+def round_section(occ, x, ry, rz):
+    """An ellipse in the plane x = const."""
+    e = occ.addEllipse(x, 0, 0, max(ry, rz), min(ry, rz))
+    occ.rotate([(1, e)], x, 0, 0, 0, 1, 0, math.pi / 2)
+    return occ.addCurveLoop([e])
+
+
+def tail_assembly(occ):
+    """Five solids, not fused: a tail cone, a fin, two stabilisers and a
+    sphere (overlapping solids of an assembly)."""
+    occ.addThruSections([round_section(occ, x, r, r)
+                         for x, r in ((0, 3.0), (8, 2.4), (16, 1.0), (18, 0.3))], makeSolid=True)
+    lofted_wing(occ, 6, 7, 5, 4, lift=1.5, vertical=True)
+    lofted_wing(occ, 8, 5, 3.5, 2.5, lift=0.2)
+    occ.mirror(lofted_wing(occ, 8, 5, 3.5, 2.5, lift=0.2), 0, 1, 0, 0)
+    occ.addSphere(13, 0, 2.0, 0.9)
+
+
+def wing_body(occ):
+    """A fuselage, two wings and a fin fused into one solid."""
+    body = occ.addThruSections([round_section(occ, x, 1.1 * r, r) for x, r in (
+        (0.5, 0.6), (4, 2.2), (10, 3), (40, 3), (52, 2.0), (60, 0.5))], makeSolid=True)
+    right = lofted_wing(occ, 20, 18, 9, 6, lift=-1.5)
+    left = lofted_wing(occ, 20, 18, 9, 6, lift=-1.5)
+    occ.mirror(left, 0, 1, 0, 0)
+    fin = lofted_wing(occ, 48, 8, 6, 5, lift=1.0, vertical=True)
+    occ.fuse(body, right + left + fin)
+
+
+def wing_body_metres(occ):
+    """The wing-body scaled to metres; the points its sections were drawn
+    through stay where they were (free points far from the faces)."""
+    wing_body(occ)
+    occ.synchronize()
+    occ.dilate(gmsh.model.getEntities(3), 0, 0, 0, 1e-3, 1e-3, 1e-3)
+
+
+def machined_block(occ):
+    """A block with a pocket and 24 drilled holes of two sizes."""
+    block = occ.addBox(0, 0, 0, 120, 80, 30)
+    tools = [(3, occ.addCylinder(10 + 20 * i, 10 + 20 * j, 20, 0, 0, 11, 2.5 if (i + j) % 2 else 1.6))
+             for i in range(6) for j in range(4)]
+    tools.append((3, occ.addBox(30, 25, 12, 60, 30, 20)))
+    occ.cut([(3, block)], tools)
+
+
+def crankshaft(occ):
+    """Journals, webs and offset pins fused into one solid."""
+    parts, x = [], 0
+    for k in range(3):
+        parts.append((3, occ.addCylinder(x, 0, 0, 10, 0, 0, 4)))
+        parts.append((3, occ.addBox(x + 10, -6, -5, 4, 18, 10)))
+        parts.append((3, occ.addCylinder(x + 14, 9 if k % 2 else 0, 3 if k % 2 else 0, 8, 0, 0, 3.5)))
+        parts.append((3, occ.addBox(x + 22, -6, -5, 4, 18, 10)))
+        x += 26
+    parts.append((3, occ.addCylinder(x, 0, 0, 12, 0, 0, 4)))
+    occ.fuse(parts[:1], parts[1:])
+
+
+def open_wheel(occ):
+    """A hub and nine twisted blades that are open surfaces (no solid)."""
+    occ.addCylinder(0, 0, 0, 0, 0, 10, 5)
+    for k in range(9):
+        a = 2 * math.pi * k / 9
+        wires = []
+        for j, r in enumerate((4.8, 9, 14)):
+            t = a + 0.25 * j
+            pts = [occ.addPoint(r * math.cos(t + d), r * math.sin(t + d), z)
+                   for d, z in ((-0.15, 1), (0.0, 5), (0.15, 9))]
+            wires.append(occ.addWire([occ.addSpline(pts)], checkClosed=False))
+        occ.addThruSections(wires, makeSolid=False, makeRuled=False)
+
+
 MODELS = [
     ("fillet_box.step", fillet_box), ("thin_fillets.brep", thin_fillets),
     ("twisted_loft.brep", twisted_loft), ("blade_loft.brep", blade_loft),
@@ -180,7 +284,10 @@ MODELS = [
     ("wavy_bspline.step", wavy_bspline), ("torus_box.brep", torus_box),
     ("thick_vase.step", thick_vase), ("bent_pipe.brep", bent_pipe),
     ("coil_pipe.brep", coil_pipe), ("studs_plate.step", studs_plate),
-    ("wedge_pocket.brep", wedge_pocket),
+    ("wedge_pocket.brep", wedge_pocket), ("tail_assembly.step", tail_assembly),
+    ("wing_body.step", wing_body), ("wing_body_metres.step", wing_body_metres),
+    ("machined_block.step", machined_block), ("crankshaft.step", crankshaft),
+    ("open_wheel.step", open_wheel),
 ]
 
 
