@@ -452,7 +452,8 @@ static run_outcome run_mesher(const hoc_model *model, const int *algorithm, doub
   if (*error != HOC_OK) return RUN_FAILED;
   /* the whole mesh within timeout; each face probe within it (the child
    * ends the probe), then the faces that passed without a limit */
-  if (timeout > 0) child.idle_limit = crashed ? PROBE_SLACK * timeout + PROBE_SLACK_SECONDS : timeout;
+  if (timeout > 0)
+    child.idle_limit = crashed ? PROBE_SLACK * timeout + PROBE_SLACK_SECONDS : timeout;
   reader r = {&child, 0};
   hoc_status st = HOC_OK;
   for (int f = 0; crashed && f < model->n_faces && st == HOC_OK; ++f) {
@@ -578,7 +579,8 @@ static hoc_status generate_once(hoc_model *model, const hoc_linear_options *opti
     if (run == RUN_CRASHED) {
       status = crash_error(end.signal, end.first_error,
                            probed < model->n_faces ? "while trying the faces one by one"
-                                                   : "without the faces that crash it alone", timeout);
+                                                   : "without the faces that crash it alone",
+                           timeout);
       goto done;
     }
   }
