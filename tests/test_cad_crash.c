@@ -15,7 +15,6 @@
 #include <string.h>
 #include <sys/time.h>
 #include <sys/wait.h>
-#include <time.h>
 #include <unistd.h>
 
 #define DATA HOC_SOURCE_DIR "/tests/data/"
@@ -94,21 +93,15 @@ static int silent_child(void *arg, int fd) {
   return 0;
 }
 
-static double seconds(void) {
-  struct timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
 static void test_child_idle_limit(void) {
   hoc_child c;
   hoc_child_end end;
   CHECK_OK(hoc_child_start(&c, silent_child, NULL));
   c.idle_limit = 0.3;
-  double t0 = seconds();
+  double t0 = hoc_now();
   char byte;
   CHECK(!hoc_child_read(&c, &byte, 1));
-  double waited = seconds() - t0;
+  double waited = hoc_now() - t0;
   CHECK(c.timed_out);
   CHECK(waited >= 0.29);
   hoc_child_finish(&c, 0, &end);

@@ -78,7 +78,7 @@ static void run(const hoc_mesh *m0, int rule, hoc_optimize_result *r, watch *w) 
   hoc_opt_rules_default(&rules);
   if (!rule) rules.exact_relax_uv_min_order = INT_MAX;
   int limited;
-  if (w->tangled) CHECK_OK(hoc_opt_run_rules(m, &o, &rules, 0, 0, hoc_opt_now(), r, &limited));
+  if (w->tangled) CHECK_OK(hoc_opt_run_rules(m, &o, &rules, 0, 0, hoc_now(), r, &limited));
   int x = r->diagnostics.exact_phase;
   size_t folds = x > 1 && x <= MAX_SWEEPS ? w->exact[x - 1] : 0,
          boundary = x > 1 && x <= MAX_SWEEPS ? w->boundary[x - 1] : 0;

@@ -39,7 +39,7 @@ static void optimise(const hoc_mesh *start, size_t pool_bytes, int threads, outc
   rules.frame_pool_bytes = pool_bytes;
   int limited = 0, before = omp_get_max_threads();
   omp_set_num_threads(threads);
-  CHECK_OK(hoc_opt_run_rules(out->mesh, NULL, &rules, 0, 0, hoc_opt_now(), &out->r, &limited));
+  CHECK_OK(hoc_opt_run_rules(out->mesh, NULL, &rules, 0, 0, hoc_now(), &out->r, &limited));
   omp_set_num_threads(before);
   CHECK_OK(hoc_mesh_measure(out->mesh, HOC_MEASURE_SHAPE, NULL, NULL, &out->st));
 }

@@ -58,7 +58,7 @@ static void check_case(int order, unsigned long long seed) {
   if (!first) goto out;
   hoc_optimize_result a = {0}, r = {0};
   int limited = 1;
-  CHECK_OK(hoc_opt_run(first, NULL, 0, 0, hoc_opt_now(), &a, &limited));
+  CHECK_OK(hoc_opt_run(first, NULL, 0, 0, hoc_now(), &a, &limited));
   CHECK_OK(hoc_mesh_measure(first, HOC_MEASURE_SHAPE, NULL, NULL, &st));
   CHECK(st.tangled == a.tangled_final);
   /* the whole optimiser */

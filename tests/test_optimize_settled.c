@@ -37,7 +37,7 @@ static void run(const hoc_mesh *m0, int settled_sweeps, hoc_optimize_result *r, 
   hoc_opt_rules_default(&rules);
   rules.settled_sweeps = settled_sweeps;
   int limited;
-  CHECK_OK(hoc_opt_run_rules(m, &o, &rules, 0, 0, hoc_opt_now(), r, &limited));
+  CHECK_OK(hoc_opt_run_rules(m, &o, &rules, 0, 0, hoc_now(), r, &limited));
   hoc_quality_stats st = {0};
   CHECK_OK(hoc_mesh_measure(m, HOC_MEASURE_SHAPE, NULL, NULL, &st));
   *qmin = st.min;

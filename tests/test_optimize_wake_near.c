@@ -128,7 +128,7 @@ static size_t far_moves(const hoc_mesh *m0, const unsigned char *near, int rule)
   if (!rule) rules.wake_near_min_order = INT_MAX;
   hoc_optimize_result r;
   int limited;
-  CHECK_OK(hoc_opt_run_rules(m, &o, &rules, 0, 0, hoc_opt_now(), &r, &limited));
+  CHECK_OK(hoc_opt_run_rules(m, &o, &rules, 0, 0, hoc_now(), &r, &limited));
   printf("rule %s: %zu moves of the %zu far nodes in %d sweeps with the fold left in %d; "
          "%.2f s\n",
          rule ? "on " : "off", w.far_moves, w.far_nodes, w.sweeps, w.folded, r.seconds);

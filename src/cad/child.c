@@ -39,7 +39,6 @@
 #include <sys/prctl.h>
 #include <sys/types.h>
 #include <sys/wait.h>
-#include <time.h>
 #include <unistd.h>
 
 const char *hoc_signal_name(int sig) {
@@ -131,19 +130,13 @@ hoc_status hoc_child_start(hoc_child *c, hoc_child_fn fn, void *arg) {
   return HOC_OK;
 }
 
-static double now(void) {
-  struct timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
 /* Waits until the child's pipe has data or is closed: 1, or 0 (the child
  * killed) once c->idle_limit seconds passed without either. */
 static int wait_readable(hoc_child *c) {
   if (!(c->idle_limit > 0)) return 1;
-  double end = now() + c->idle_limit;
+  double end = hoc_now() + c->idle_limit;
   for (;;) {
-    double left = end - now();
+    double left = end - hoc_now();
     if (left > 0) {
       struct pollfd pfd = {c->fd, POLLIN, 0};
       int r = poll(&pfd, 1, (int)fmin(ceil(1e3 * left), 1e9));
@@ -151,7 +144,7 @@ static int wait_readable(hoc_child *c) {
       if (r < 0 && errno != EINTR) return 1; /* (the read reports the error) */
       if (r < 0) continue;
     }
-    if (now() < end) continue;
+    if (hoc_now() < end) continue;
     if (c->pid > 0) kill(c->pid, SIGKILL);
     c->timed_out = 1;
     return 0;

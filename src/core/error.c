@@ -7,6 +7,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 static _Thread_local char error_message[512];
 static _Thread_local char error_location[256];
@@ -24,6 +25,12 @@ hoc_status hoc_error_set(hoc_status status, const char *file, int line, const ch
   snprintf(error_location, sizeof error_location, "%s:%d (%s)", base ? base + 1 : file, line,
            func);
   return status;
+}
+
+double hoc_now(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
 const char *hoc_last_error(void) { return error_message; }

@@ -22,6 +22,9 @@ const char *hoc_last_error_location(void);
 /** Forget the last error of this thread. */
 void hoc_error_clear(void);
 
+/** Seconds on a monotonic clock. */
+double hoc_now(void);
+
 /** The first failure inside a parallel region, carried to the calling
  *  thread (messages are per thread). */
 typedef struct hoc_par_error {

@@ -12,13 +12,6 @@
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
-
-double hoc_opt_now(void) {
-  struct timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 void hoc_optimize_options_default(hoc_optimize_options *o) {
   if (!o) return;
@@ -120,7 +113,7 @@ hoc_status hoc_mesh_optimize_full(hoc_mesh *mesh, const hoc_optimize_options *op
 hoc_status hoc_mesh_optimize_rules(hoc_mesh *mesh, const hoc_optimize_options *options,
                                    const hoc_opt_rules *rules, hoc_optimize_result *result) {
   HOC_CHECK(mesh, HOC_ERR_ARGUMENT, "no mesh given");
-  double t0 = hoc_opt_now();
+  double t0 = hoc_now();
   hoc_opt_snapshot start = {0}, first = {0};
   hoc_optimize_result a = {0}, b = {0};
   int limited = 0, limited_b;
@@ -155,7 +148,7 @@ hoc_status hoc_mesh_optimize_rules(hoc_mesh *mesh, const hoc_optimize_options *o
       if (status == HOC_OK) status = restored;
     }
   }
-  a.seconds = hoc_opt_now() - t0;
+  a.seconds = hoc_now() - t0;
   hoc_opt_snapshot_free(&start);
   hoc_opt_snapshot_free(&first);
   if (result && status == HOC_OK) *result = a;

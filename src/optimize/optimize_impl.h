@@ -498,8 +498,6 @@ hoc_status hoc_opt_run_rules(hoc_mesh *mesh, const hoc_optimize_options *options
 /* hoc_mesh_optimize with the given rules (NULL: the defaults). */
 hoc_status hoc_mesh_optimize_rules(hoc_mesh *mesh, const hoc_optimize_options *options,
                                    const hoc_opt_rules *rules, hoc_optimize_result *result);
-/* Seconds on a monotonic clock. */
-double hoc_opt_now(void);
 hoc_status hoc_opt_snapshot_take(hoc_opt_snapshot *s, const hoc_mesh *m, size_t tangled, double f);
 hoc_status hoc_opt_snapshot_restore(const hoc_opt_snapshot *s, hoc_mesh *m);
 void hoc_opt_snapshot_free(hoc_opt_snapshot *s);

@@ -280,7 +280,7 @@ static hoc_status run_sweeps(run *r, int *used_up) {
     HOC_TRY(after_sweep(r, tangled_before));
     if (r->opts.progress) {
       hoc_optimize_iteration info = {r->it,  r->f,  r->qmin,
-                                     r->tangled, moved, hoc_opt_now() - r->t0,
+                                     r->tangled, moved, hoc_now() - r->t0,
                                      1 + r->second};
       if (r->opts.progress(r->opts.progress_user, &info))
         return HOC_ERROR(HOC_ERR_INTERRUPTED, "optimisation interrupted");
@@ -485,7 +485,7 @@ hoc_status hoc_opt_run_rules(hoc_mesh *mesh, const hoc_optimize_options *options
   hoc_opt_journal_free(o, &r->best);
   r->res.objective_final = r->f;
   r->res.tangled_final = r->tangled;
-  r->res.seconds = hoc_opt_now() - t0;
+  r->res.seconds = hoc_now() - t0;
   if (result) *result = r->res;
   *limited = r->limited;
   hoc_opt_scratch_free(r->scr, r->nthreads);

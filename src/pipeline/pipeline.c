@@ -12,13 +12,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
-
-double hoc_pipeline_now(void) {
-  struct timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 hoc_status hoc_run_event(const hoc_run *run, hoc_event_kind kind, const char *fmt, ...) {
   if (!run->o.event) return HOC_OK;
@@ -345,10 +338,10 @@ static hoc_status coarse_start(const hoc_run *run, hoc_stages *r, const hoc_mesh
     HOC_TRY_GOTO(hoc_pipeline_raise(run, lin, o->order, ho, NULL), done);
     goto done;
   }
-  double t0 = hoc_pipeline_now();
+  double t0 = hoc_now();
   HOC_ALLOC_GOTO(q, hoc_mesh_num_elements(coarse) + 1, done);
   HOC_TRY_GOTO(hoc_pipeline_raise(run, coarse, o->order, &raised, q), done);
-  HOC_TRY_GOTO(hoc_run_stage(run, r, "re-raised", raised, hoc_pipeline_now() - t0, q, NULL), done);
+  HOC_TRY_GOTO(hoc_run_stage(run, r, "re-raised", raised, hoc_now() - t0, q, NULL), done);
   hoc_mesh_destroy(ho);
   *ho = raised;
   raised = NULL;
@@ -382,9 +375,9 @@ static hoc_status mesh_model_run(const hoc_run *run, hoc_model *model, model_mes
   size_t prev_elements = 0;
   for (;;) {
     lo.face_size = face_size;
-    double t0 = hoc_pipeline_now();
+    double t0 = hoc_now();
     HOC_TRY_GOTO(linear_mesh(run, model, &lo, unlowered_min, prev_elements, &m->lin), done);
-    double t_lin = hoc_pipeline_now() - t0;
+    double t_lin = hoc_now() - t0;
     HOC_TRY_GOTO(warn_failed_faces(run, m->lin), done);
     HOC_TRY_GOTO(note_collapsed(run, m->lin), done);
     HOC_TRY_GOTO(note_graded(run, m->lin), done);
@@ -394,11 +387,11 @@ static hoc_status mesh_model_run(const hoc_run *run, hoc_model *model, model_mes
       HOC_TRY_GOTO(hoc_run_event(run, HOC_EVENT_PROGRESS, "raising %zu elements to order %d",
                                  hoc_mesh_num_elements(m->lin), o->order),
                    done);
-      t0 = hoc_pipeline_now();
+      t0 = hoc_now();
       free(q);
       HOC_ALLOC_GOTO(q, hoc_mesh_num_elements(m->lin) + 1, done);
       HOC_TRY_GOTO(hoc_pipeline_raise(run, m->lin, o->order, &m->ho, q), done);
-      HOC_TRY_GOTO(hoc_run_stage(run, r, "high-order", m->ho, hoc_pipeline_now() - t0, q, NULL),
+      HOC_TRY_GOTO(hoc_run_stage(run, r, "high-order", m->ho, hoc_now() - t0, q, NULL),
                    done);
       *final = m->ho;
     }
@@ -486,9 +479,9 @@ static hoc_status mesh_model_run(const hoc_run *run, hoc_model *model, model_mes
   }
   /* files hold equispaced nodes: measure what is written */
   if (status == HOC_OK && o->equispaced && o->nodeset != HOC_NODES_EQUISPACED && o->order >= 3) {
-    double t0 = hoc_pipeline_now();
+    double t0 = hoc_now();
     HOC_TRY_GOTO(hoc_mesh_convert(*final, HOC_NODES_EQUISPACED, &m->written), done);
-    HOC_TRY_GOTO(hoc_run_stage(run, r, "written", m->written, hoc_pipeline_now() - t0, NULL, NULL),
+    HOC_TRY_GOTO(hoc_run_stage(run, r, "written", m->written, hoc_now() - t0, NULL, NULL),
                  done);
     *final = m->written;
   }
@@ -504,7 +497,7 @@ hoc_status hoc_mesh_model(hoc_model *model, const hoc_mesh_options *options, hoc
   if (report) *report = NULL;
   HOC_CHECK(model, HOC_ERR_ARGUMENT, "no model given");
   hoc_run run;
-  double t0 = hoc_pipeline_now();
+  double t0 = hoc_now();
   HOC_TRY(run_start(&run, options));
   HOC_TRY(check_model_options(model, &run.o));
   if (run.o.refinements < 0)
@@ -568,9 +561,9 @@ hoc_status hoc_mesh_repair(const hoc_mesh *in, const hoc_mesh_options *options, 
   hoc_report *rep = NULL;
   hoc_stages r = {0};
   hoc_status status = HOC_OK;
-  double t0 = hoc_pipeline_now();
+  double t0 = hoc_now();
   HOC_TRY_GOTO(hoc_mesh_copy(in, &cur), done);
-  HOC_TRY_GOTO(hoc_run_stage(&run, &r, "input", cur, hoc_pipeline_now() - t0, NULL, NULL), done);
+  HOC_TRY_GOTO(hoc_run_stage(&run, &r, "input", cur, hoc_now() - t0, NULL, NULL), done);
   HOC_TRY_GOTO(hoc_repair_optimize_starts(&run, &r, &cur, run.o.refinements > 0 ? &start : NULL),
                done);
   if (hoc_stages_last(&r)->stage.stats.tangled && run.o.refinements > 0)
@@ -606,8 +599,8 @@ hoc_status hoc_mesh_quality_report(const hoc_mesh *mesh, hoc_measure measure, ho
   HOC_TRY(run_start(&run, &o));
   hoc_stages r = {0};
   hoc_report *rep = NULL;
-  double t0 = hoc_pipeline_now();
-  hoc_status status = hoc_run_stage(&run, &r, "input", mesh, hoc_pipeline_now() - t0, NULL, NULL);
+  double t0 = hoc_now();
+  hoc_status status = hoc_run_stage(&run, &r, "input", mesh, hoc_now() - t0, NULL, NULL);
   if (status == HOC_OK) status = hoc_report_create("quality", measure, &rep);
   if (status == HOC_OK) status = hoc_report_finish(rep, &r, mesh, HOC_FIND_NOTHING, t0);
   if (status == HOC_OK)

@@ -150,9 +150,6 @@ hoc_status hoc_pipeline_raise(const hoc_run *run, const hoc_mesh *in, int order,
 /* The last stage of r (r->n >= 1). */
 static inline hoc_stage_record *hoc_stages_last(hoc_stages *r) { return &r->s[r->n - 1]; }
 
-/* Seconds on a monotonic clock. */
-double hoc_pipeline_now(void);
-
 /* Tell the caller (run->o.event) of an event with a printf-style message;
  * HOC_ERR_INTERRUPTED if the caller cancels. */
 hoc_status hoc_run_event(const hoc_run *run, hoc_event_kind kind, const char *fmt, ...)
@@ -247,7 +244,7 @@ typedef enum hoc_findings {
 
 /* Fill the report with the stages r of the result `final`: its size, its q
  * and the findings asked for (hoc_findings flags), and the run's seconds
- * since t0 (hoc_pipeline_now at its start). */
+ * since t0 (hoc_now at its start). */
 hoc_status hoc_report_finish(hoc_report *report, const hoc_stages *r, const hoc_mesh *final,
                              int findings, double t0);
 

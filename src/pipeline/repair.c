@@ -52,13 +52,13 @@ static hoc_status optimize_stage(const hoc_run *run, hoc_stages *r, const char *
   HOC_TRY(hoc_run_event(run, HOC_EVENT_PROGRESS, "optimizing %zu elements",
                         hoc_mesh_num_elements(mesh)));
   hoc_optimize_result res;
-  double t0 = hoc_pipeline_now();
+  double t0 = hoc_now();
   HOC_TRY(full ? hoc_mesh_optimize_full(mesh, &oo, &res) : hoc_mesh_optimize(mesh, &oo, &res));
   if (res.diagnostics.polished)
     HOC_TRY(hoc_run_event(run, HOC_EVENT_NOTE,
                           "the final polish untangled %zu element(s) the sweeps left",
                           res.diagnostics.polished));
-  return hoc_run_stage(run, r, name, mesh, hoc_pipeline_now() - t0, NULL, &res);
+  return hoc_run_stage(run, r, name, mesh, hoc_now() - t0, NULL, &res);
 }
 
 hoc_status hoc_repair_optimize(const hoc_run *run, hoc_stages *r, const char *name, hoc_mesh *mesh,
@@ -108,7 +108,7 @@ static hoc_status split_tangled(const hoc_run *run, hoc_stages *r, int n_keep, h
   unsigned char *tangled = NULL, *pieces = NULL, *children = NULL;
   hoc_status status = HOC_OK;
   HOC_ALLOC_GOTO(tangled, ne, done);
-  double t0 = hoc_pipeline_now();
+  double t0 = hoc_now();
   /* a split of the optimised mesh is optimised locally: its children and
    * the rings around them (HOC_PIPELINE_LOCAL_RINGS) */
   int local = !base;
@@ -138,7 +138,7 @@ static hoc_status split_tangled(const hoc_run *run, hoc_stages *r, int n_keep, h
                              r->refinements, faces),
                done);
   r->n = n_keep; /* the stages before the optimisation stay */
-  HOC_TRY_GOTO(hoc_run_stage(run, r, "split", *fine, hoc_pipeline_now() - t0, NULL, NULL), done);
+  HOC_TRY_GOTO(hoc_run_stage(run, r, "split", *fine, hoc_now() - t0, NULL, NULL), done);
   if (fine_start) HOC_TRY_GOTO(hoc_mesh_copy(*fine, fine_start), done);
   HOC_TRY_GOTO(hoc_repair_optimize(run, r, "optimized", *fine, children), done);
 done:
@@ -381,7 +381,7 @@ done:
  * round: hoc_mesh_repair tries both. */
 static hoc_status replace_nodes(const hoc_run *run, hoc_stages *r, const hoc_mesh *mesh,
                                 hoc_mesh **alt) {
-  double t0 = hoc_pipeline_now();
+  double t0 = hoc_now();
   hoc_mesh *lin = NULL;
   double *q = hoc_calloc(hoc_mesh_num_elements(mesh) + 1, sizeof *q);
   hoc_status s = q ? hoc_mesh_elevate(mesh, 1, HOC_NODES_EQUISPACED, &lin)
@@ -390,7 +390,7 @@ static hoc_status replace_nodes(const hoc_run *run, hoc_stages *r, const hoc_mes
   same.o.nodeset = hoc_mesh_nodeset(mesh);
   if (s == HOC_OK) s = hoc_pipeline_raise(&same, lin, hoc_mesh_order(mesh), alt, q);
   hoc_mesh_destroy(&lin);
-  if (s == HOC_OK) s = hoc_run_stage(run, r, "re-placed", *alt, hoc_pipeline_now() - t0, q, NULL);
+  if (s == HOC_OK) s = hoc_run_stage(run, r, "re-placed", *alt, hoc_now() - t0, q, NULL);
   free(q);
   if (s != HOC_OK) {
     hoc_mesh_destroy(alt);

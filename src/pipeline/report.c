@@ -278,7 +278,7 @@ hoc_status hoc_report_finish(hoc_report *report, const hoc_stages *r, const hoc_
     HOC_TRY(find_tangled(report, final, report->quality, optimized_stage(r),
                          !!(findings & HOC_FIND_FROM_CAD)));
   if (findings & HOC_FIND_CUSPS) HOC_TRY(find_cusps(report, r, final, report->quality));
-  report->seconds = hoc_pipeline_now() - t0;
+  report->seconds = hoc_now() - t0;
   return HOC_OK;
 }
 

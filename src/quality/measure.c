@@ -7,7 +7,6 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 
 /* q of the elements flagged in which[n_elems] (all if NULL), in parallel;
  * normals from the CAD at their slots only. */
@@ -63,12 +62,6 @@ static hoc_status check_measure(hoc_measure measure) {
   return HOC_OK;
 }
 
-static double now(void) {
-  struct timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
 /* q of every element with tables t, in parallel; normals from the CAD. */
 hoc_status hoc_mesh_measure_tables(const hoc_mesh *mesh, const hoc_quality_tables *t,
                                    hoc_measure measure, double *q) {
@@ -111,7 +104,7 @@ hoc_status hoc_mesh_measure(const hoc_mesh *mesh, hoc_measure measure, double *q
                             unsigned char *tangled, hoc_quality_stats *stats) {
   HOC_CHECK(mesh, HOC_ERR_ARGUMENT, "no mesh given");
   HOC_TRY(check_measure(measure));
-  double t0 = now();
+  double t0 = hoc_now();
   const hoc_quality_tables *t;
   HOC_TRY(hoc_quality_tables_get(mesh->order, mesh->nodeset, &t));
   size_t ne = mesh->n_elems;
@@ -125,7 +118,7 @@ hoc_status hoc_mesh_measure(const hoc_mesh *mesh, hoc_measure measure, double *q
     for (size_t e = 0; e < ne; ++e) tangled[e] = q[e] == 0.0;
   if (status == HOC_OK && stats) {
     hoc_quality_stats_from(q, ne, mesh->order, stats);
-    stats->seconds = now() - t0;
+    stats->seconds = hoc_now() - t0;
   }
   if (q != quality) free(q);
   return status;
