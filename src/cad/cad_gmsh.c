@@ -450,18 +450,20 @@ static void add_box(double *bb, const double *add, int first) {
 /* bb: the box of m's faces, of the curves that bound them, of those
  * curves' vertices and of the volumes. */
 static hoc_status faces_box(const hoc_model *m, double *bb) {
-  unsigned char *used = hoc_calloc((size_t)m->n_curves + (size_t)m->n_vertices + 1, 1);
+  int max_tag = 0;
+  for (int c = 0; c < m->n_curves; ++c)
+    if (m->curves[c].tag > max_tag) max_tag = m->curves[c].tag;
+  unsigned char *used = hoc_calloc((size_t)max_tag + 1 + (size_t)m->n_vertices, 1);
   HOC_CHECK(used, HOC_ERR_MEMORY, "out of memory");
-  unsigned char *vused = used + m->n_curves;
+  unsigned char *vused = used + max_tag + 1; /* used[tag] for curves */
   for (int i = 0; i < m->n_faces; ++i) {
     const hoc_cad_face *f = &m->faces[i];
     add_box(bb, f->bbox, i == 0);
     for (int k = 0; k < f->n_curves; ++k)
-      for (int c = 0; c < m->n_curves; ++c)
-        if (m->curves[c].tag == abs(f->curves[k])) used[c] = 1;
+      if (abs(f->curves[k]) <= max_tag) used[abs(f->curves[k])] = 1;
   }
   for (int c = 0; c < m->n_curves; ++c) {
-    if (!used[c]) continue;
+    if (m->curves[c].tag < 0 || !used[m->curves[c].tag]) continue;
     add_box(bb, m->curves[c].bbox, 0);
     if (m->curves[c].v0 >= 0) vused[m->curves[c].v0] = 1;
     if (m->curves[c].v1 >= 0) vused[m->curves[c].v1] = 1;
