@@ -154,7 +154,10 @@ void hoc_linear_sizes(const hoc_model *model, const hoc_linear_options *options,
  *  on which its mesher crashes, are skipped and counted in
  *  hoc_mesh_num_failed_faces(); HOC_ERR_MESH if it crashes on the curves
  *  or on every face, HOC_ERR_INTERRUPTED if the child is interrupted
- *  (SIGINT, SIGTERM).
+ *  (SIGINT, SIGTERM). The model remembers the faces that crash the mesher
+ *  or do not finish within the limit, and later meshings of it leave them
+ *  out at once (a face that did not finish: while the limit is no longer);
+ *  open the model again to try them afresh.
  *  @param[in]  model    the CAD model; it must outlive the mesh
  *  @param[in]  options  NULL for defaults
  *  @param[out] mesh     new order-1 mesh */

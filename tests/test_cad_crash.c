@@ -80,6 +80,19 @@ static void test_mesher_crash(void) {
     double dist = 1;
     CHECK_OK(hoc_mesh_max_cad_distance(m, &dist));
     CHECK(dist <= 1e-10 * model->diagonal);
+    /* the model remembers the faces that crash the mesher, and a second
+     * meshing leaves them out without crashing it again: the same mesh */
+    CHECK(model->mesher_failed != NULL);
+    for (int f = 0; model->mesher_failed && f < model->n_faces; ++f) {
+      int left_out = 0;
+      for (int i = 0; i < failed; ++i) left_out |= m->failed_faces[i] == f;
+      CHECK(!!model->mesher_failed[f] == left_out);
+      CHECK(model->mesher_failed[f] != HOC_MESHER_TIMED_OUT);
+    }
+    hoc_mesh *again = mesh_model(model);
+    CHECK(same_mesh(m, again));
+    CHECK(again && again->n_failed_faces == failed && again->timed_out_faces == 0);
+    hoc_mesh_destroy(&again);
   }
   hoc_mesh_destroy(&m);
   hoc_model_destroy(&model);
@@ -122,7 +135,7 @@ static void test_mesher_timeout(void) {
   o.mesher_timeout = NAN;
   hoc_mesh *m = NULL;
   CHECK_STATUS(hoc_mesh_generate_linear(model, &o, &m), HOC_ERR_ARGUMENT);
-  o.mesher_timeout = 2;
+  o.mesher_timeout = 3;
   CHECK_OK(hoc_mesh_generate_linear(model, &o, &m));
   CHECK(no_children());
   if (m) {
@@ -133,6 +146,28 @@ static void test_mesher_timeout(void) {
     CHECK(hoc_mesh_failed_face_tag(m, 0) == 1);
     CHECK(hoc_mesh_num_elements(m) > 0);
   }
+  /* meshed again within the same limit, or a shorter one, the face is
+   * left out at once (a wait for the limit would take it all) */
+  for (int k = 0; k < 2 && m; ++k) {
+    o.mesher_timeout = k ? 2 : 3;
+    hoc_mesh *again = NULL;
+    double t0 = hoc_now();
+    CHECK_OK(hoc_mesh_generate_linear(model, &o, &again));
+    double took = hoc_now() - t0;
+    printf("wing again, limit %g s: %.2f s\n", o.mesher_timeout, took);
+    CHECK(took < o.mesher_timeout);
+    CHECK(again && again->n_failed_faces == 1 && again->failed_faces[0] == m->failed_faces[0]);
+    CHECK(again && again->timed_out_faces == 1 && again->n_elems == m->n_elems);
+    hoc_mesh_destroy(&again);
+  }
+  /* a longer limit tries the face again */
+  o.mesher_timeout = 3.5;
+  hoc_mesh *longer = NULL;
+  CHECK_OK(hoc_mesh_generate_linear(model, &o, &longer));
+  CHECK(longer && longer->timed_out_faces == 1 && longer->n_failed_faces == 1);
+  CHECK(model->mesher_limit && model->mesher_limit[m ? m->failed_faces[0] : 0] == 3.5);
+  CHECK(no_children());
+  hoc_mesh_destroy(&longer);
   hoc_mesh_destroy(&m);
   hoc_model_destroy(&model);
 }

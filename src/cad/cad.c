@@ -42,6 +42,8 @@ void hoc_model_destroy(hoc_model **model) {
   free(m->face_of_tag);
   free(m->curve_of_tag);
   free(m->vertex_of_tag);
+  free(m->mesher_failed);
+  free(m->mesher_limit);
   free(m);
   *model = NULL;
 }

@@ -109,7 +109,16 @@ struct hoc_model {
   int tolerance_known;
   double tolerance;
   int tolerance_curve, tolerance_face; /* tags where it was found (-1: none or a vertex) */
+  /* Faces gmsh's mesher failed on alone in an earlier linear meshing of
+   * this model (mesh/linear_gmsh.c), left out of the later ones: NULL, or
+   * per face 0, the signal that ended its probe, or HOC_MESHER_TIMED_OUT
+   * (it did not finish within mesher_limit[f] seconds). */
+  unsigned char *mesher_failed;
+  double *mesher_limit;
 };
+
+/** hoc_model.mesher_failed of a face gmsh's mesher did not finish in time. */
+enum { HOC_MESHER_TIMED_OUT = 254 };
 
 /** Allocate an empty model with room for the entities; the backend fills
  *  them and then calls hoc_cad_finish. */

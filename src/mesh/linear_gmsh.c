@@ -104,11 +104,13 @@ typedef struct mesh_job {
   int isolate; /* find the faces that crash gmsh first, and leave them out */
   int face;    /* a probe of one face (index): does meshing it alone crash? */
   double timeout; /* > 0: seconds a face probe may take (then it counts as failed) */
+  const unsigned char *skip; /* NULL, or [n_faces]: nonzero for the faces known to fail
+                                (left out unprobed; a probe reports the value) */
 } mesh_job;
 
 /* A face probe's report of a face gmsh did not finish meshing in time
  * (other nonzero reports are the signal that ended the probe, or 255). */
-enum { FACE_TIMED_OUT = 254 };
+enum { FACE_TIMED_OUT = HOC_MESHER_TIMED_OUT };
 
 /* While the faces are probed one by one, the parent waits for each face's
  * report up to PROBE_SLACK times the probe's limit plus PROBE_SLACK_SECONDS
@@ -222,7 +224,11 @@ static int mesh_child(void *arg, int fd) {
     if (!keep) return 1;
     int sent = 1;
     for (int f = 0; f < model->n_faces && sent; ++f) {
-      mesh_job probe = {model, job->algorithm, 0, f, 0};
+      if (job->skip && job->skip[f]) {
+        sent = send_u64(fd, job->skip[f]);
+        continue;
+      }
+      mesh_job probe = {model, job->algorithm, 0, f, 0, NULL};
       hoc_child c;
       hoc_child_end end;
       uint64_t ok = 1;
@@ -240,6 +246,12 @@ static int mesh_child(void *arg, int fd) {
     if (sent) mesh_only(model, keep);
     free(keep); /* a leak checker looks at the child too */
     if (!sent) return 1;
+  } else if (job->skip) {
+    unsigned char *keep = hoc_calloc((size_t)model->n_faces, 1);
+    if (!keep) return 1;
+    for (int f = 0; f < model->n_faces; ++f) keep[f] = !job->skip[f];
+    mesh_only(model, keep);
+    free(keep);
   }
   gmshModelMeshGenerate(2, &ierr);
   if (ierr) return send_u64(fd, 1) && send_gmsh_error(fd, "meshing") ? 0 : 1;
@@ -442,11 +454,13 @@ typedef enum run_outcome {
 /* One run of gmsh's mesher in a child. With `crashed` ([n_faces]), the
  * child first finds the faces that crash gmsh: crashed[f] receives the
  * signal that ended face f's probe (0: none), *probed how many faces it
- * reported before it ended. */
+ * reported before it ended. The faces flagged in skip (NULL: none) are left
+ * out unprobed, their flag reported as their probe's. A run that did not
+ * finish in time ends with end->signal FACE_TIMED_OUT. */
 static run_outcome run_mesher(const hoc_model *model, const int *algorithm, double timeout,
-                              unsigned char *crashed, int *probed, linear_parts *parts,
-                              hoc_status *error, hoc_child_end *end) {
-  mesh_job job = {model, algorithm, crashed != NULL, -1, timeout};
+                              const unsigned char *skip, unsigned char *crashed, int *probed,
+                              linear_parts *parts, hoc_status *error, hoc_child_end *end) {
+  mesh_job job = {model, algorithm, crashed != NULL, -1, timeout, skip};
   hoc_child child;
   *error = hoc_child_start(&child, mesh_child, &job);
   if (*error != HOC_OK) return RUN_FAILED;
@@ -473,6 +487,7 @@ static run_outcome run_mesher(const hoc_model *model, const int *algorithm, doub
   else if (st == HOC_OK) st = read_parts(&r, model, parts);
   hoc_child_finish(&child, st != HOC_OK && !r.ended && !gmsh_error, end);
   if (r.ended) {
+    if (end->signal && end->timed_out) end->signal = FACE_TIMED_OUT;
     if (end->signal) return RUN_CRASHED;
     *error = HOC_ERROR(HOC_ERR_MESH,
                        "gmsh's mesher ended without a result (exit status %d)%s%s",
@@ -495,6 +510,53 @@ static hoc_status crash_error(int sig, const char *first_error, const char *doin
   return HOC_ERROR(HOC_ERR_MESH, "gmsh's mesher %s (%s) %s%s%s",
                    sig == SIGKILL ? "was killed" : "crashed", hoc_signal_name(sig), doing,
                    first_error[0] ? ": " : "", first_error);
+}
+
+/* The faces gmsh's mesher failed on alone in an earlier meshing of the
+ * model, to leave out now (*skip: NULL if none, else [n_faces] their
+ * probes' reports): each crash, and each time-out within a limit no
+ * shorter than timeout (0: none). A face that breaks the mesher costs a
+ * whole run and its probe once per model, not again at each meshing of
+ * the run (the grading's, the other algorithms', the remeshings). */
+static hoc_status known_failures(const hoc_model *model, double timeout, unsigned char **skip,
+                                 int *n_skipped) {
+  *skip = NULL;
+  *n_skipped = 0;
+  if (!model->mesher_failed) return HOC_OK;
+  unsigned char *s;
+  HOC_ALLOC(s, (size_t)model->n_faces);
+  for (int f = 0; f < model->n_faces; ++f) {
+    unsigned char why = model->mesher_failed[f];
+    int timed_out = why == FACE_TIMED_OUT;
+    s[f] = why && (!timed_out || (timeout > 0 && timeout <= model->mesher_limit[f])) ? why : 0;
+    *n_skipped += s[f] != 0;
+  }
+  if (*n_skipped) *skip = s;
+  else free(s);
+  return HOC_OK;
+}
+
+/* Record in the model the faces the probes found failing (crashed[f] for
+ * f < probed, interruptions apart) and the limit they had. */
+static hoc_status remember_failures(hoc_model *model, const unsigned char *crashed, int probed,
+                                    double timeout) {
+  for (int f = 0; f < probed; ++f) {
+    if (!crashed[f] || hoc_signal_is_interrupt(crashed[f])) continue;
+    if (!model->mesher_failed) {
+      unsigned char *why = hoc_calloc((size_t)model->n_faces, 1);
+      double *limit = hoc_calloc((size_t)model->n_faces, sizeof *limit);
+      if (!why || !limit) {
+        free(why);
+        free(limit);
+        return HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
+      }
+      model->mesher_failed = why;
+      model->mesher_limit = limit;
+    }
+    model->mesher_failed[f] = crashed[f];
+    model->mesher_limit[f] = timeout;
+  }
+  return HOC_OK;
 }
 
 /* One linear mesh with gmsh's current size settings and the faces'
@@ -545,8 +607,14 @@ static hoc_status generate_once(hoc_model *model, const hoc_linear_options *opti
   int n_timed_out = 0;
   double timeout = o.mesher_timeout < 0 ? 0 : o.mesher_timeout > 0 ? o.mesher_timeout
                                                                    : HOC_MESHER_TIMEOUT;
-  run_outcome run = run_mesher(model, algorithm, timeout, NULL, NULL, &p, &err, &end);
-  if (run == RUN_CRASHED && end.timed_out) end.signal = FACE_TIMED_OUT;
+  unsigned char *skip = NULL;
+  int n_skipped = 0;
+  HOC_TRY_GOTO(known_failures(model, timeout, &skip, &n_skipped), done);
+  if (n_skipped == model->n_faces) {
+    status = crash_error(skip[0], "", "on every face (in an earlier meshing)", timeout);
+    goto done;
+  }
+  run_outcome run = run_mesher(model, algorithm, timeout, skip, NULL, NULL, &p, &err, &end);
   if (run == RUN_CRASHED && !hoc_signal_is_interrupt(end.signal) && model->n_faces > 1) {
     /* mesh the faces that neither crash gmsh nor keep it from finishing
      * in time; the others count as failed */
@@ -558,16 +626,15 @@ static hoc_status generate_once(hoc_model *model, const hoc_linear_options *opti
       status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
       goto done;
     }
-    run = run_mesher(model, algorithm, timeout, crashed, &probed, &p, &err, &end);
-    if (run == RUN_CRASHED && end.timed_out) end.signal = FACE_TIMED_OUT;
+    run = run_mesher(model, algorithm, timeout, skip, crashed, &probed, &p, &err, &end);
     for (int f = 0; f < probed; ++f) {
-      n_timed_out += crashed[f] == FACE_TIMED_OUT;
       if (crashed[f] && hoc_signal_is_interrupt(crashed[f])) {
         status = crash_error(crashed[f], "", "", timeout);
         goto done;
       }
       n_crashed += crashed[f] != 0;
     }
+    HOC_TRY_GOTO(remember_failures(model, crashed, probed, timeout), done);
     if (run == RUN_CRASHED && probed == 0) {
       status = crash_error(end.signal, end.first_error, "meshing the curves", timeout);
       goto done;
@@ -622,12 +689,15 @@ static hoc_status generate_once(hoc_model *model, const hoc_linear_options *opti
   HOC_TRY_GOTO(hoc_mesh_assemble(model, &src, 1e-6, mesh), done);
   (*mesh)->n_failed_faces = p.n_failed;
   (*mesh)->failed_faces = p.failed;
+  for (int f = 0; f < model->n_faces; ++f)
+    n_timed_out += (crashed ? crashed[f] : skip ? skip[f] : 0) == FACE_TIMED_OUT;
   (*mesh)->timed_out_faces = n_timed_out;
   (*mesh)->mesher_timeout = timeout;
   p.failed = NULL;
 done:
   linear_parts_free(&p);
   free(crashed);
+  free(skip);
   return status;
 }
 
