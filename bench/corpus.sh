@@ -12,7 +12,8 @@
 # or a timeout. Last, a summary: runs, bounds met, the failures.
 #
 # usage: bench/corpus.sh [--orders "2 3 5"] [--limit S] [--threads N]
-#                        [--timeout S] [--hocad HOCAD] [--cad-check] [MODELS...]
+#                        [--timeout S] [--hocad HOCAD] [--cad-check]
+#                        [--mesh-args "ARGS"] [MODELS...]
 #   MODELS       model files (paths, or names in the corpus directory; a
 #                model in a directory named hard is a hard model). Default:
 #                every model in the corpus directory, then every one in its
@@ -27,6 +28,8 @@
 #   --cad-check  also write each mesh and check with `hocad quality` that
 #                every node lies on the CAD (within 1e-9 of the model's
 #                size); the check is not in the times
+#   --mesh-args  more options for each `hocad mesh` run of the tables (split
+#                at spaces), e.g. "--size-factor 2"
 # Bounds (bench/report_line.py): exit 0, 0 tangled, min q >= 0.9 x linear
 # min q (or hocad's note puts every element below that at a CAD cusp), mean
 # q >= linear mean q - 0.02, with --cad-check every node on the CAD, and at
@@ -38,7 +41,7 @@ set -u
 . "$(dirname "$0")/common.sh"
 need_time
 args=("$@")
-orders="2 3 5" limit=30 threads=2 tmo=1800 hocad_arg="" cad_check=0 models=()
+orders="2 3 5" limit=30 threads=2 tmo=1800 hocad_arg="" cad_check=0 models=() mesh_args=()
 while [ $# -gt 0 ]; do
   case $1 in
     --orders) orders=$2; shift 2 ;;
@@ -47,6 +50,7 @@ while [ $# -gt 0 ]; do
     --timeout) tmo=$2; shift 2 ;;
     --hocad) hocad_arg=$2; shift 2 ;;
     --cad-check) cad_check=1; shift ;;
+    --mesh-args) read -r -a mesh_args <<< "$2"; shift 2 ;;
     -h|--help) sed -n '2,/^# SPDX/p' "$0" | sed '$d; s/^# \{0,1\}//'; exit 0 ;;
     -*) echo "corpus.sh: unknown option $1 (see --help)" >&2; exit 1 ;;
     *) models+=("$1"); shift ;;
@@ -86,7 +90,8 @@ one_run() {
   rm -f "$work"/r.json "$work"/m.msh "$work"/q.txt "$work"/why
   [ $cad_check = 1 ] && out=(-o "$work/m.msh") || out=(--no-output)
   /usr/bin/time -f "%e %M" -o "$work/time" timeout -k 10 "$tmo" "$hocad" mesh "$m" --order "$p" \
-    --threads "$threads" "${out[@]}" -q --json "$work/r.json" > /dev/null 2> "$work/err"
+    --threads "$threads" "${out[@]}" "${mesh_args[@]}" -q --json "$work/r.json" \
+    > /dev/null 2> "$work/err"
   rc=$?
   wall=$(tail -n 1 "$work/time" | cut -d' ' -f1)
   if [ $cad_check = 1 ] && [ -s "$work/m.msh" ]; then

@@ -58,6 +58,9 @@ expect 1 "size not a number" -- mesh "$model" --size abc
 expect 1 "size NaN" -- mesh "$model" --size nan
 expect 1 "size infinite" -- mesh "$model" --size inf
 expect 1 "curvature zero" -- mesh "$model" --curvature 0
+expect 1 "size factor zero" -- mesh "$model" --size-factor 0
+expect 1 "size and size factor" -- mesh "$model" --size 5 --size-factor 2
+expect 1 "size factor under size-min" -- mesh "$model" --size-factor 2 --size-min 100
 expect 1 "mesher timeout zero" -- mesh "$model" --mesher-timeout 0
 expect 1 "refinements negative" -- mesh "$model" --refinements -1
 expect 1 "refinements too many" -- mesh "$model" --refinements 11

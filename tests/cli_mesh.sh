@@ -28,6 +28,20 @@ ok "quality exits 0" "[ $? -eq 0 ]"
 mean_mesh=$(grep -o '"name": "optimized".*"mean": [0-9.e-]*' t20.json | grep -o '"mean": [0-9.e-]*' | cut -d' ' -f2)
 mean_file=$(grep -o '"mean": [0-9.e-]*' q.json | cut -d' ' -f2)
 ok "file measures as the run did ($mean_mesh vs $mean_file)" "awk -v a=$mean_mesh -v b=$mean_file 'BEGIN{d=a-b; if(d<0)d=-d; exit !(d<1e-9)}'"
+# --size-factor scales the default sizes: 1 is the default mesh, 2 one
+# with edges up to twice as long (a third of the triangles on this part)
+linear_elements() {
+  rm -f lin.json # (exit 5: the raised mesh is left tangled)
+  "$hocad" mesh "$model" --order 2 --no-optimize --no-output --json lin.json "$@" > lin.txt 2>&1
+  grep -o '"name": "linear"[^}]*' lin.json | grep -o '"elements": [0-9]*' |
+    cut -d' ' -f2
+}
+n_default=$(linear_elements)
+n_one=$(linear_elements --size-factor 1)
+n_two=$(linear_elements --size-factor 2)
+ok "size factor: 1 ($n_one) is the default ($n_default), 2 ($n_two) coarser" \
+  "[ -n '$n_default' ] && [ '$n_one' = '$n_default' ] && [ '${n_two:-0}' -gt 0 ] && [ '${n_two:-0}' -lt \$(( ${n_default:-0} / 2 )) ]"
+
 # optimize a mesh read from a file (here the raised, unoptimized one; at
 # order 2 it has 4 tangled elements)
 "$hocad" mesh "$model" --order 2 --no-optimize -o raised.msh > /dev/null 2>&1

@@ -71,6 +71,7 @@ static double now(void) {
 typedef struct options {
   const char *model, *mesh_in, *out, *vtu, *json, *linear, *png, *histogram;
   int threads, quiet, no_output;
+  double size_factor; /* --size-factor: the default size (and size_min) times this (0: none) */
   hoc_mesh_options pipe; /* what the library's pipelines take (measure: every command's) */
   hoc_picture_options picture;
   hoc_msh_options msh; /* the .msh written */
@@ -165,19 +166,19 @@ static const char *usage_mesh =
     "usage: hocad mesh MODEL [options]\n"
     "\n"
     "Mesh every face of MODEL (.step .stp .iges .igs .brep) with linear triangles,\n"
-    "raise them to order P (new nodes placed in each face's parametric space and\n"
-    "mapped onto the surface, or, on faces where that does better, at the feet of\n"
-    "the straight elements' points on the surface; nodes on CAD curves placed on\n"
-    "the curves), and\n"
-    "report the quality q = 1/eta of every stage (eta: the paper's Definition 2).\n"
-    "Elements an untangled result has below 0.9 x the linear mesh's min q are\n"
-    "optimised once more with two rings around them (a 'smoothed' stage).\n"
+    "raise them to order P (new nodes in each face's parameters, or at the feet of\n"
+    "the straight elements' points on the surface where that does better; on CAD\n"
+    "curves, on the curves), untangle and smooth them, and report the quality\n"
+    "q = 1/eta of every stage (eta: the paper's Definition 2). Elements an\n"
+    "untangled result has below 0.9 x the linear mesh's min q are optimised once\n"
+    "more with two rings around them (a 'smoothed' stage).\n"
     "\n"
     "options:\n"
     "  -p, --order P        element order, 1..15 (default 3)\n"
     "  --size H             maximum edge length of the linear mesh\n"
     "                       (default: bounding-box diagonal / 20)\n"
     "  --size-min H         minimum edge length (default: size / 10)\n"
+    "  --size-factor F      the default --size and --size-min times F\n"
     "  --curvature N        elements per 2*pi of curvature radius (default 12 for\n"
     "                       order 1, 8 above: curved elements follow the surface)\n"
     "  --mesher-timeout S   seconds gmsh may take to mesh (default 300), then each\n"
@@ -334,6 +335,8 @@ static int parse(int argc, char **argv, options *o, const char **pos, int max_po
       if (!parsed(hoc_cli_parse_positive("--size-min", v, &o->pipe.size_min))) return 0;
     } else if (mesh && VALUE("--size")) {
       if (!parsed(hoc_cli_parse_positive("--size", v, &o->pipe.size))) return 0;
+    } else if (mesh && VALUE("--size-factor")) {
+      if (!parsed(hoc_cli_parse_positive("--size-factor", v, &o->size_factor))) return 0;
     } else if (mesh && VALUE("--curvature")) {
       if (!parsed(hoc_cli_parse_positive("--curvature", v, &o->pipe.curvature))) return 0;
       if (o->pipe.curvature > 1000) {
@@ -555,6 +558,10 @@ static int cmd_mesh(int argc, char **argv) {
   if (code >= 0) return code;
   o.model = pos[0];
   const hoc_mesh_options *mo = &o.pipe;
+  if (o.size_factor > 0 && mo->size > 0) {
+    error_line("give --size or --size-factor, not both");
+    return EXIT_USAGE;
+  }
   if (mo->size_min > 0 && mo->size > 0 && mo->size_min > mo->size) {
     error_line("--size-min %g exceeds --size %g", mo->size_min, mo->size);
     return EXIT_USAGE;
@@ -580,6 +587,13 @@ static int cmd_mesh(int argc, char **argv) {
   if (st != HOC_OK) return fail(st, 1);
   double model_seconds = now() - t0, bb[6];
   hoc_model_bbox(model, bb);
+  if (o.size_factor > 0) {
+    hoc_linear_options lo;
+    hoc_linear_options_default(&lo);
+    double size_max, size_min;
+    hoc_linear_sizes(model, &lo, &size_max, &size_min);
+    o.pipe.size = o.size_factor * size_max;
+  }
   if (!o.quiet)
     printf("model %s: %d faces, %d curves, %d vertices, size %.4g x %.4g x %.4g (%.2f s)\n",
            o.model, hoc_model_num_faces(model), hoc_model_num_curves(model),
