@@ -494,16 +494,8 @@ static hoc_status reinterpolate(const hoc_mesh *in, int p, hoc_nodeset set,
   src.line_curve = lcurve;
   src.face_orient = in->face_orient; /* same faces, same elements: same orientation */
   HOC_TRY_GOTO(hoc_mesh_assemble(in->model, &src, INFINITY, out), done);
-  if (in->n_failed_faces) {
-    (*out)->failed_faces = hoc_calloc((size_t)in->n_failed_faces, sizeof(int));
-    if (!(*out)->failed_faces) {
-      hoc_mesh_destroy(out);
-      status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
-      goto done;
-    }
-    memcpy((*out)->failed_faces, in->failed_faces, (size_t)in->n_failed_faces * sizeof(int));
-    (*out)->n_failed_faces = in->n_failed_faces;
-  }
+  status = hoc_mesh_copy_failed(in, *out);
+  if (status != HOC_OK) hoc_mesh_destroy(out);
 done:
   hoc_lagrange_destroy(&basis);
   free(rs);

@@ -90,6 +90,21 @@ hoc_status hoc_mesh_copy(const hoc_mesh *mesh, hoc_mesh **out) {
   return HOC_OK;
 }
 
+hoc_status hoc_mesh_copy_failed(const hoc_mesh *from, hoc_mesh *to) {
+  free(to->failed_faces);
+  to->failed_faces = NULL;
+  to->n_failed_faces = 0;
+  if (from->n_failed_faces) {
+    HOC_ALLOC(to->failed_faces, (size_t)from->n_failed_faces);
+    memcpy(to->failed_faces, from->failed_faces,
+           (size_t)from->n_failed_faces * sizeof *to->failed_faces);
+  }
+  to->n_failed_faces = from->n_failed_faces;
+  to->timed_out_faces = from->timed_out_faces;
+  to->mesher_timeout = from->mesher_timeout;
+  return HOC_OK;
+}
+
 void hoc_mesh_destroy(hoc_mesh **mesh) {
   if (!mesh || !*mesh) return;
   hoc_mesh *m = *mesh;

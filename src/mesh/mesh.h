@@ -62,7 +62,8 @@ struct hoc_mesh {
   int *failed_faces;        /* [n_failed_faces] face indices the mesher could not mesh */
   int timed_out_faces;      /* how many of them gmsh did not finish meshing in
                                mesher_timeout seconds (hoc_linear_options) */
-  double mesher_timeout;
+  double mesher_timeout;    /* (a mesh raised or split from another has its failed faces:
+                               hoc_mesh_copy_failed) */
   double off_cad;           /* largest distance of a given node position from its entity
                                (nonzero only for meshes kept as read) */
   double face_gap;          /* largest distance between a curve or vertex node and its
@@ -154,6 +155,10 @@ hoc_status hoc_mesh_assemble(hoc_model *model, const hoc_mesh_source *src, doubl
  *  moved slots. Pole flags stay: *at_pole is set where a moved slot lands
  *  on a pole side (the mesh is then not the assembled one). */
 hoc_status hoc_mesh_move_nodes(hoc_mesh *m, const unsigned char *which, int *at_pole);
+
+/** The faces the linear mesher left out of `from` (failed_faces and what
+ *  timed out) given to `to`, a mesh raised or split from it. */
+hoc_status hoc_mesh_copy_failed(const hoc_mesh *from, hoc_mesh *to);
 
 /* Steps of hoc_mesh_assemble once the slots are built (poles.c), in order. */
 /** One slot per element at each pole slot shared with other faces: the
