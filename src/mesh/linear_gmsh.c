@@ -537,11 +537,12 @@ static hoc_status known_failures(const hoc_model *model, double timeout, unsigne
 }
 
 /* Record in the model the faces the probes found failing (crashed[f] for
- * f < probed, interruptions apart) and the limit they had. */
-static hoc_status remember_failures(hoc_model *model, const unsigned char *crashed, int probed,
-                                    double timeout) {
+ * f < probed, interruptions apart, and not those skipped: their record
+ * stays) and the limit they had. */
+static hoc_status remember_failures(hoc_model *model, const unsigned char *skip,
+                                    const unsigned char *crashed, int probed, double timeout) {
   for (int f = 0; f < probed; ++f) {
-    if (!crashed[f] || hoc_signal_is_interrupt(crashed[f])) continue;
+    if (!crashed[f] || hoc_signal_is_interrupt(crashed[f]) || (skip && skip[f])) continue;
     if (!model->mesher_failed) {
       unsigned char *why = hoc_calloc((size_t)model->n_faces, 1);
       double *limit = hoc_calloc((size_t)model->n_faces, sizeof *limit);
@@ -634,7 +635,7 @@ static hoc_status generate_once(hoc_model *model, const hoc_linear_options *opti
       }
       n_crashed += crashed[f] != 0;
     }
-    HOC_TRY_GOTO(remember_failures(model, crashed, probed, timeout), done);
+    HOC_TRY_GOTO(remember_failures(model, skip, crashed, probed, timeout), done);
     if (run == RUN_CRASHED && probed == 0) {
       status = crash_error(end.signal, end.first_error, "meshing the curves", timeout);
       goto done;
