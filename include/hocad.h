@@ -148,9 +148,10 @@ void hoc_linear_sizes(const hoc_model *model, const hoc_linear_options *options,
 
 /** Mesh every face of the model with linear triangles. gmsh's mesher runs
  *  in a child process (docs/kernel.md). Where CAD curves are shorter than
- *  a tenth of the edges at their ends, gmsh meshes the model a second time
- *  with sizes graded down to them, and that mesh is kept if it is better
- *  (docs/cli.md, `hocad mesh` rule 10). Faces the kernel cannot mesh, or
+ *  a tenth of the edges at their ends, or faces narrower than a tenth of
+ *  their edges, gmsh meshes the model a second time with sizes graded down
+ *  to them, and that mesh is kept if it is better (docs/cli.md, `hocad
+ *  mesh` rule 10). Faces the kernel cannot mesh, or
  *  on which its mesher crashes, are skipped and counted in
  *  hoc_mesh_num_failed_faces(); HOC_ERR_MESH if it crashes on the curves
  *  or on every face, HOC_ERR_INTERRUPTED if the child is interrupted

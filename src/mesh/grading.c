@@ -47,6 +47,7 @@ struct hoc_linear_grading {
   size_t *seg_list, *seg_end;
   double min_size;
   int n_curves; /* the short curves */
+  int n_faces;  /* the faces with thin triangles */
 };
 
 static double dist2(const double *a, const double *b) {
@@ -179,9 +180,13 @@ static double curve_curvature(const hoc_model *model, int c, double t) {
 }
 
 /* Each node's size as gmsh's sizing gave it: the curvature's (2 pi / (n
- * kappa), kappa the largest of its faces' and curves' there) within
- * [hmin, hmax]; at a pole (no normal there) the first mesh's mean edge
- * at the node; at most the bound of a face meshed finer (face_size). */
+ * kappa), kappa the largest of its faces' and curves' there), at most the
+ * first mesh's mean edge at the node (gmsh's mesh is finer than its
+ * curvature sizing where it extends its curves' sizes into the faces, and
+ * the graded meshing does not: that extension carries the size graded
+ * down along a thin face into every face beside it), within [hmin, hmax];
+ * at a pole (no normal there) that mean edge; at most the bound of a face
+ * meshed finer (face_size). */
 static hoc_status node_sizes(const hoc_mesh *lin, double hmin, double hmax, double ncurv,
                              const double *face_size, double *h) {
   const hoc_model *model = lin->model;
@@ -218,7 +223,8 @@ static hoc_status node_sizes(const hoc_mesh *lin, double hmin, double hmax, doub
     }
   for (size_t i = 0; i < nn; ++i) {
     double size = h[i] > 0 && ncurv > 0 ? 2 * 3.14159265358979323846 / (ncurv * h[i]) : hmax;
-    if (pole[i] && count[i]) size = sum[i] / (double)count[i];
+    double mean = count[i] ? sum[i] / (double)count[i] : size;
+    size = pole[i] ? mean : fmin(size, mean);
     h[i] = fmin(hmax, fmax(hmin, size));
   }
   for (size_t s = 0; face_size && s < lin->n_slots; ++s) {
@@ -235,8 +241,11 @@ done:
 
 /* The curves of lin far shorter than the mesh around them: their
  * segments into g (NULL g: only counted in *n). */
-static hoc_status short_curves(const hoc_mesh *lin, double ratio, hoc_linear_grading *g,
-                               size_t *n) {
+/* The curves far shorter than the edges at their nodes: is_short[c] set
+ * for each (is_short[n_curves]); their segments into g (NULL: only
+ * counted), their number in *n. */
+static hoc_status short_curves(const hoc_mesh *lin, double ratio, unsigned char *is_short,
+                               hoc_linear_grading *g, size_t *n) {
   const hoc_model *model = lin->model;
   size_t nn = lin->n_nodes, nc = (size_t)model->n_curves;
   hoc_status status = HOC_OK;
@@ -259,11 +268,13 @@ static hoc_status short_curves(const hoc_mesh *lin, double ratio, hoc_linear_gra
     around[c] = fmax(around[c], fmax(longest[a], longest[b]));
   }
   *n = 0;
-  for (size_t c = 0; g && c < nc; ++c)
-    g->n_curves += len[c] > 0 && around[c] > ratio * len[c];
+  for (size_t c = 0; c < nc; ++c) {
+    is_short[c] = len[c] > 0 && around[c] > ratio * len[c];
+    if (g) g->n_curves += is_short[c];
+  }
   for (size_t l = 0; l < lin->n_lines; ++l) {
     int c = lin->line_curve[l];
-    if (!(len[c] > 0 && around[c] > ratio * len[c])) continue;
+    if (!is_short[c]) continue;
     if (g) {
       memcpy(g->seg + 6 * *n, lin->xyz + 3 * lin->line_conn[2 * l], 3 * sizeof *g->seg);
       memcpy(g->seg + 6 * *n + 3, lin->xyz + 3 * lin->line_conn[2 * l + 1], 3 * sizeof *g->seg);
@@ -277,6 +288,87 @@ done:
   free(len);
   free(around);
   return status;
+}
+
+/* Is node i of lin on curve c (on it, or at one of its ends)? */
+static int on_curve(const hoc_mesh *lin, size_t i, int c) {
+  const hoc_cad_curve *cv = &lin->model->curves[c];
+  if (lin->dim[i] == HOC_ON_CURVE) return lin->entity[i] == c;
+  return lin->dim[i] == HOC_ON_VERTEX && (lin->entity[i] == cv->v0 || lin->entity[i] == cv->v1);
+}
+
+/* Is node i on a curve flagged in is_short (or at its end)? */
+static int on_short(const hoc_mesh *lin, const unsigned char *is_short, size_t i) {
+  if (lin->dim[i] == HOC_ON_CURVE) return is_short[lin->entity[i]];
+  for (int c = 0; c < lin->model->n_curves; ++c)
+    if (is_short[c] && on_curve(lin, i, c)) return 1;
+  return 0;
+}
+
+/* The width of linear triangle e across its longest edge k..k+1 if its
+ * face is narrower there than 1 / ratio of that edge, else 0: its three
+ * corners lie on the face's boundary, on two curves or more (a face's
+ * width runs between its sides; three nodes on one curve only make a
+ * triangle as flat as the curve is straight) and none on a short curve
+ * (short_curves grades those: the sliver on a short curve is narrow
+ * along it only). */
+static double thin_width(const hoc_mesh *lin, double ratio, const unsigned char *is_short,
+                         size_t e, int *k) {
+  const size_t *t = lin->conn + 3 * e;
+  double len[3], longest = 0;
+  for (int i = 0; i < 3; ++i) {
+    if (lin->dim[t[i]] == HOC_ON_FACE) return 0;
+    len[i] = hoc_dist3(lin->xyz + 3 * t[i], lin->xyz + 3 * t[(i + 1) % 3]);
+    if (len[i] > longest) longest = len[i], *k = i;
+  }
+  double e1[3], e2[3], c[3];
+  for (int d = 0; d < 3; ++d) {
+    e1[d] = lin->xyz[3 * t[1] + d] - lin->xyz[3 * t[0] + d];
+    e2[d] = lin->xyz[3 * t[2] + d] - lin->xyz[3 * t[0] + d];
+  }
+  hoc_cross3(e1, e2, c);
+  double w = longest > 0 ? sqrt(hoc_dot3(c, c)) / longest : 0;
+  if (!(w > 0 && longest > ratio * w)) return 0;
+  /* one curve through all three: a curve node's curve is the only one */
+  for (int i = 0; i < 3; ++i)
+    if (lin->dim[t[i]] == HOC_ON_CURVE) {
+      int cv = lin->entity[t[i]];
+      if (on_curve(lin, t[0], cv) && on_curve(lin, t[1], cv) && on_curve(lin, t[2], cv)) return 0;
+      break;
+    }
+  /* (three vertex nodes: no curve has three ends) */
+  for (int i = 0; i < 3; ++i)
+    if (on_short(lin, is_short, t[i])) return 0;
+  return w;
+}
+
+/* The thin triangles' longest edges as segments of their widths into g
+ * (NULL: only counted), their number in *n; the faces they lie on
+ * counted in g->n_faces. */
+static hoc_status thin_faces(const hoc_mesh *lin, double ratio, const unsigned char *is_short,
+                             hoc_linear_grading *g, size_t *n) {
+  unsigned char *face_seen = NULL;
+  if (g) HOC_ALLOC(face_seen, (size_t)lin->model->n_faces + 1);
+  *n = 0;
+  for (size_t e = 0; e < lin->n_elems; ++e) {
+    int k = 0;
+    double w = thin_width(lin, ratio, is_short, e, &k);
+    if (!(w > 0)) continue;
+    if (g) {
+      size_t s = g->n_seg + *n;
+      const size_t *t = lin->conn + 3 * e;
+      memcpy(g->seg + 6 * s, lin->xyz + 3 * t[k], 3 * sizeof *g->seg);
+      memcpy(g->seg + 6 * s + 3, lin->xyz + 3 * t[(k + 1) % 3], 3 * sizeof *g->seg);
+      g->seg_h[s] = w;
+      g->min_size = fmin(g->min_size, w);
+      int f = lin->elem_face[e];
+      g->n_faces += !face_seen[f];
+      face_seen[f] = 1;
+    }
+    ++*n;
+  }
+  free(face_seen);
+  return HOC_OK;
 }
 
 /* g's grid of lin's nodes (cells of the mean edge length) and its node
@@ -395,14 +487,19 @@ hoc_status hoc_linear_grading_make(const hoc_mesh *lin, double ratio, double hmi
   hoc_status status = HOC_OK;
   hoc_linear_grading *g = NULL;
   double *h = NULL;
-  size_t n_seg;
-  HOC_TRY(short_curves(lin, ratio, NULL, &n_seg));
-  if (!n_seg) return HOC_OK; /* nothing to grade */
+  unsigned char *is_short = NULL;
+  size_t n_short, n_thin;
+  HOC_ALLOC_GOTO(is_short, (size_t)lin->model->n_curves + 1, done);
+  HOC_TRY_GOTO(short_curves(lin, ratio, is_short, NULL, &n_short), done);
+  HOC_TRY_GOTO(thin_faces(lin, ratio, is_short, NULL, &n_thin), done);
+  if (!n_short && !n_thin) goto done; /* nothing to grade */
   HOC_ALLOC_GOTO(g, 1, done);
-  HOC_ALLOC_GOTO(g->seg, 6 * n_seg, done);
-  HOC_ALLOC_GOTO(g->seg_h, n_seg, done);
+  HOC_ALLOC_GOTO(g->seg, 6 * (n_short + n_thin), done);
+  HOC_ALLOC_GOTO(g->seg_h, n_short + n_thin, done);
   g->min_size = INFINITY;
-  HOC_TRY_GOTO(short_curves(lin, ratio, g, &g->n_seg), done);
+  HOC_TRY_GOTO(short_curves(lin, ratio, is_short, g, &g->n_seg), done);
+  HOC_TRY_GOTO(thin_faces(lin, ratio, is_short, g, &n_thin), done);
+  g->n_seg += n_thin;
   HOC_ALLOC_GOTO(h, lin->n_nodes + 1, done);
   HOC_TRY_GOTO(node_sizes(lin, hmin, hmax, ncurv, face_size, h), done);
   HOC_TRY_GOTO(node_grid(lin, h, g), done);
@@ -412,12 +509,15 @@ hoc_status hoc_linear_grading_make(const hoc_mesh *lin, double ratio, double hmi
 done:
   hoc_linear_grading_free(&g);
   free(h);
+  free(is_short);
   return status;
 }
 
 size_t hoc_linear_grading_segments(const hoc_linear_grading *g) { return g ? g->n_seg : 0; }
 
 int hoc_linear_grading_curves(const hoc_linear_grading *g) { return g ? g->n_curves : 0; }
+
+int hoc_linear_grading_faces(const hoc_linear_grading *g) { return g ? g->n_faces : 0; }
 
 double hoc_linear_grading_min_size(const hoc_linear_grading *g) { return g->min_size; }
 

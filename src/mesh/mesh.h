@@ -55,7 +55,9 @@ struct hoc_mesh {
                                opposite, 0 if the face has no elements */
   size_t n_collapsed;       /* triangles dropped at collapsed sides (collapse.c) */
   int graded_curves;        /* a linear mesh graded down to this many short CAD curves
-                               (grading.c), and gmsh's own mesh's triangles and min q */
+                               and thin faces (grading.c), and gmsh's own mesh's
+                               triangles and min q */
+  int graded_faces;
   size_t ungraded_elements;
   double ungraded_min_q;
   int n_failed_faces;
@@ -377,6 +379,8 @@ void hoc_linear_grading_free(hoc_linear_grading **g);
 /* Segments of the short curves, the curves; the shortest curve's length. */
 size_t hoc_linear_grading_segments(const hoc_linear_grading *g);
 int hoc_linear_grading_curves(const hoc_linear_grading *g);
+/* The faces narrower than 1 / ratio of their edges somewhere. */
+int hoc_linear_grading_faces(const hoc_linear_grading *g);
 double hoc_linear_grading_min_size(const hoc_linear_grading *g);
 /* The size at x. */
 double hoc_linear_grading_size(const hoc_linear_grading *g, const double *x);

@@ -119,13 +119,19 @@ static hoc_status warn_failed_faces(const hoc_run *run, const hoc_mesh *lin) {
 
 /* A linear mesh graded down to short CAD curves (mesh/grading.c). */
 static hoc_status note_graded(const hoc_run *run, const hoc_mesh *lin) {
-  if (!lin->graded_curves) return HOC_OK;
+  if (!lin->graded_curves && !lin->graded_faces) return HOC_OK;
+  char curves[96] = "", faces[96] = "";
+  if (lin->graded_curves)
+    snprintf(curves, sizeof curves, "%d CAD curve(s) shorter than a tenth of the edges around them",
+             lin->graded_curves);
+  if (lin->graded_faces)
+    snprintf(faces, sizeof faces, "%d face(s) narrower than a tenth of their edges",
+             lin->graded_faces);
   return hoc_run_event(run, HOC_EVENT_NOTE,
-                       "the linear mesh is graded down to %d CAD curve(s) shorter than a tenth "
-                       "of the edges around them: %zu triangles (gmsh's own mesh: %zu, min q "
-                       "%.4f)",
-                       lin->graded_curves, lin->n_elems, lin->ungraded_elements,
-                       lin->ungraded_min_q);
+                       "the linear mesh is graded down to %s%s%s: %zu triangles (gmsh's own "
+                       "mesh: %zu, min q %.4f)",
+                       curves, *curves && *faces ? " and " : "", faces, lin->n_elems,
+                       lin->ungraded_elements, lin->ungraded_min_q);
 }
 
 /* Triangles the assembly dropped at collapsed sides (mesh/collapse.c). */
