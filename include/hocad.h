@@ -135,9 +135,11 @@ typedef struct hoc_linear_options {
                               whole mesh takes longer, each face is meshed alone within it
                               and the faces that do not finish count as failed (the mesh's
                               failed faces), as faces that crash gmsh do */
+  int grading; /**< 1 (default): a second meshing graded down to short curves and thin
+                    faces where gmsh's has them (hoc_mesh_generate_linear); 0: gmsh's mesh */
 } hoc_linear_options;
 
-/** Fill options with defaults (all "choose", order 1, no progress). */
+/** Fill options with defaults (all "choose", order 1, no progress, grading). */
 void hoc_linear_options_default(hoc_linear_options *options);
 
 /** The edge lengths the linear mesher uses for these options on this model:
@@ -610,6 +612,7 @@ typedef struct hoc_mesh_options {
   hoc_event_fn event;     /**< NULL, or called on every event */
   void *event_user;       /**< passed to event */
   double mesher_timeout;  /**< hoc_mesh_model: hoc_linear_options.mesher_timeout */
+  int grading;            /**< hoc_mesh_model: hoc_linear_options.grading (default 1) */
 } hoc_mesh_options;
 
 /** Fill options with the defaults: order 3, equispaced nodes, shape

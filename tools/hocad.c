@@ -183,6 +183,7 @@ static const char *usage_mesh =
     "                       order 1, 8 above: curved elements follow the surface)\n"
     "  --mesher-timeout S   seconds gmsh may take to mesh (default 300), then each\n"
     "                       face alone: the faces it does not finish are skipped\n"
+    "  --no-grading         gmsh's mesh as is, not graded to short curves, thin faces\n"
     "  --nodes SET          equispaced | fekete | warp-blend (default equispaced);\n"
     "                       files always hold equispaced nodes\n"
     "  --measure M          shape | oddy (default shape)\n"
@@ -192,13 +193,10 @@ static const char *usage_mesh =
     "                       them unless this is given)\n"
     "  --refinements N      if elements stay tangled, split them as 'hocad optimize'\n"
     "                       does (below order 6, or on faces that fold; kept if\n"
-    "                       that leaves none tangled), else mesh\n"
-    "                       their faces again with edges half as long (and,\n"
-    "                       without --size-min, a minimum size ten times smaller\n"
-    "                       unless that more than quadruples the mesh) and\n"
-    "                       start again, at most N times (default 2), then\n"
-    "                       split, N times per chain (with --linear only the\n"
-    "                       splits, default 3)\n" OPTIMIZE_OPTIONS
+    "                       that leaves none tangled), else mesh their faces again\n"
+    "                       with edges half as long (docs/cli.md) and start again,\n"
+    "                       at most N times (default 2), then split, N times per\n"
+    "                       chain (with --linear only the splits, default 3)\n" OPTIMIZE_OPTIONS
     "  -o, --output F.msh   gmsh MSH 4.1 output (default: MODEL-NAME_pP.msh here;\n"
     "                       orders above 10 have no MSH type: use --vtu)\n" MSH_OPTIONS
     "  --vtu F.vtu          VTK Lagrange triangles with q per element\n"
@@ -352,6 +350,8 @@ static int parse(int argc, char **argv, options *o, const char **pos, int max_po
       o->linear = v;
     } else if (mesh && !strcmp(a, "--no-optimize")) {
       o->pipe.optimize = 0;
+    } else if (mesh && !strcmp(a, "--no-grading")) {
+      o->pipe.grading = 0;
     } else if (mesh && !strcmp(a, "--no-output")) {
       o->no_output = 1;
     } else if (missing) {

@@ -81,6 +81,7 @@ class LinearOptions(Structure):
         ("progress", ProgressFn),
         ("progress_user", c_void_p),
         ("mesher_timeout", c_double),
+        ("grading", c_int),
     ]
 
 
@@ -198,6 +199,7 @@ class MeshOptions(Structure):
         ("event", EventFn),
         ("event_user", c_void_p),
         ("mesher_timeout", c_double),
+        ("grading", c_int),
     ]
 
 

@@ -235,6 +235,7 @@ _MESH_OPTIONS = {
     "size_min": ("size_min", _real),
     "curvature": ("curvature", _real),
     "mesher_timeout": ("mesher_timeout", _real),
+    "grading": ("grading", _flag),
     "optimize": ("optimize", _flag),
     "fix_curves": ("fix_curves", _flag),
     "max_iterations": ("max_iterations", _int),
@@ -400,7 +401,9 @@ class Model(_Handle):
             order (int, 1..15, default 3), nodes ("equispaced", "fekete",
             "warp-blend"), measure ("shape", "oddy"), size, size_min,
             curvature (floats, 0: chosen), mesher_timeout (seconds gmsh's
-            mesher may take, 0: 300, < 0: no limit), optimize (bool, default True),
+            mesher may take, 0: 300, < 0: no limit), grading (bool, default
+            True: gmsh's mesh graded down to short curves and thin faces),
+            optimize (bool, default True),
             fix_curves (bool), max_iterations (int, 0: default),
             refinements (int, -1: default), equispaced (bool: convert the
             result to equispaced nodes), keep_stages (bool: the report's
@@ -432,14 +435,16 @@ class Model(_Handle):
         finally:
             lib.hoc_report_destroy(ctypes.byref(report))
 
-    def linear_mesh(self, size=0.0, size_min=0.0, curvature=0.0, order=1, progress=None):
+    def linear_mesh(self, size=0.0, size_min=0.0, curvature=0.0, order=1, progress=None,
+                    grading=True):
         """A linear (order-1) mesh of every face (hoc_mesh_generate_linear).
 
         size, size_min: maximum and minimum edge lengths (0: chosen);
         curvature: elements per 2 pi of curvature radius (0: chosen for
         ``order``, the order the mesh will be raised to). progress: a
         callable taking an Event ("progress", value the fraction done);
-        returning True cancels.
+        returning True cancels. grading: False keeps gmsh's mesh as it is
+        (not graded down to short curves and thin faces).
         """
         cb = _Callback(progress, _linear_event)
         o = C.LinearOptions()
@@ -448,6 +453,7 @@ class Model(_Handle):
         o.size_min = _real("size_min", size_min)
         o.curvature = _real("curvature", curvature)
         o.order = _int("order", order)
+        o.grading = _flag("grading", grading)
         o.progress = C.ProgressFn(cb)
         mesh = ctypes.c_void_p()
         st = lib.hoc_mesh_generate_linear(self._handle(), ctypes.byref(o), ctypes.byref(mesh))

@@ -34,6 +34,7 @@ int main(void) {
   FIELD(hoc_linear_options, progress);
   FIELD(hoc_linear_options, progress_user);
   FIELD(hoc_linear_options, mesher_timeout);
+  FIELD(hoc_linear_options, grading);
   SIZE(hoc_optimize_iteration);
   FIELD(hoc_optimize_iteration, iteration);
   FIELD(hoc_optimize_iteration, objective);
@@ -103,6 +104,7 @@ int main(void) {
   FIELD(hoc_mesh_options, event);
   FIELD(hoc_mesh_options, event_user);
   FIELD(hoc_mesh_options, mesher_timeout);
+  FIELD(hoc_mesh_options, grading);
   SIZE(hoc_report_files);
   FIELD(hoc_report_files, model);
   FIELD(hoc_report_files, mesh);

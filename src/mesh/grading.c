@@ -1,22 +1,28 @@
-/* Sizes graded down to CAD curves far shorter than the mesh around them:
- * the size field of a second linear meshing (hoc_linear_grading_*).
+/* Sizes graded down to CAD curves far shorter than the mesh around them
+ * and to faces far narrower: the size field of a second linear meshing
+ * (hoc_linear_grading_*).
  *
  * A CAD curve much shorter than the edges around it (a blunt trailing
  * edge's end, a sliver face's short side, a small edge a fillet leaves)
  * gets one segment, and the triangles on it have that segment as one side
  * and the surrounding size as the two others: slivers of q about
- * sqrt(3) L / h. gmsh's curvature sizing does not grade toward it, and
+ * sqrt(3) L / h. A face much narrower than the edges (a thin plate's rim,
+ * a blunt trailing edge along the span) gets one row of such slivers
+ * across. gmsh's curvature sizing does not grade toward either, and
  * gmsh 4.8 clamps every size, its size callback's too, to its minimum
  * size (a tenth of the maximum by default), so no size field alone can.
  * The second meshing lowers the minimum and turns gmsh's curvature sizing
- * off (below the old minimum it would refine every tight radius); this
- * field gives both back: at each node of the first mesh the size gmsh's
- * sizing asked for there (2 pi / (n kappa) within [hmin, hmax], kappa the
- * largest curvature of the node's faces and curves, by differences of the
- * CAD's derivatives; at most the bound of a face meshed finer), linear in the first mesh's triangle
- * at the point (found from the nearest node), and within reach of a short curve
- * HOC_LINEAR_SHORT_SIZE x its length growing by HOC_LINEAR_GRADE per unit
- * of distance from it (mesh.h).
+ * off (below the old minimum it would refine every tight radius) and its
+ * extension of the curves' sizes into the faces (it would carry a thin
+ * face's size into the faces beside it); this field gives both back: at
+ * each node of the first mesh the size gmsh gave it (2 pi / (n kappa)
+ * within [hmin, hmax], kappa the largest curvature of the node's faces
+ * and curves, by differences of the CAD's derivatives, at most the first
+ * mesh's mean edge there and the bound of a face meshed finer), linear in
+ * the first mesh's triangle at the point (found from the nearest node),
+ * and within reach of a short curve HOC_LINEAR_SHORT_SIZE x its length,
+ * of a thin face that times its width, growing by HOC_LINEAR_GRADE per
+ * unit of distance (mesh.h).
  * SPDX-License-Identifier: GPL-2.0-or-later */
 #include "cad/cad.h"
 #include "core/geometry.h"
@@ -239,8 +245,6 @@ done:
   return status;
 }
 
-/* The curves of lin far shorter than the mesh around them: their
- * segments into g (NULL g: only counted in *n). */
 /* The curves far shorter than the edges at their nodes: is_short[c] set
  * for each (is_short[n_curves]); their segments into g (NULL: only
  * counted), their number in *n. */

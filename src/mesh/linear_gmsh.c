@@ -19,6 +19,7 @@ void hoc_linear_options_default(hoc_linear_options *o) {
   if (!o) return;
   memset(o, 0, sizeof *o);
   o->order = 1;
+  o->grading = 1;
 }
 
 void hoc_linear_sizes(const hoc_model *model, const hoc_linear_options *o, double *size_max,
@@ -830,8 +831,9 @@ hoc_status hoc_mesh_generate_linear_ungraded(hoc_model *model, const hoc_linear_
 hoc_status hoc_mesh_generate_linear_with(hoc_model *model, const hoc_linear_options *options,
                                          const int *algorithm, hoc_mesh **mesh) {
   HOC_TRY(generate_sized(model, options, algorithm, mesh));
-  /* curves far shorter than the mesh around them: the mesh made again
-   * with sizes graded down to them (HOC_LINEAR_SHORT_RATIO) */
+  if (options && !options->grading) return HOC_OK;
+  /* curves far shorter than the mesh around them, faces narrower: the mesh
+   * made again with sizes graded down to them (HOC_LINEAR_SHORT_RATIO) */
   hoc_linear_grading *g = NULL;
   hoc_mesh *graded = NULL;
   hoc_linear_options o;

@@ -328,19 +328,22 @@ enum { HOC_GMSH_MESH_ADAPT = 1, HOC_GMSH_DELAUNAY = 5, HOC_GMSH_ALGORITHM_MAX = 
 hoc_status hoc_mesh_generate_linear_with(hoc_model *model, const hoc_linear_options *options,
                                          const int *algorithm, hoc_mesh **mesh);
 
-/* Grading toward short CAD curves (mesh/grading.c). A CAD curve whose
- * length L is below 1 / HOC_LINEAR_SHORT_RATIO of the longest edge at its
- * nodes has slivers along it (q about sqrt(3) / ratio at best: 0.17 at
- * ten; the wing root's blunt trailing edge in wing_fuselage, 0.036 long
- * among edges of 5.2: q 0.0065, tangled at order 10). The linear mesh is
- * made again with the size near it HOC_LINEAR_SHORT_SIZE x L (triangles on
- * it of q about sqrt(3) / 5 = 0.35), growing by HOC_LINEAR_GRADE per unit
- * of distance (each ring of elements about three times the last), and kept
- * if it has fewer failed faces, fewer inverted triangles, or as many and a
- * higher smallest q. A gentler grade (0.5) or size (L) makes more of its
- * triangles near the curve better, for up to 16 times the elements
- * (impeller_laufrad, 143 short curves among edges a hundred times longer:
- * 3 540 -> 55 558 elements, against 10 488 with these). */
+/* Grading toward short CAD curves and thin faces (mesh/grading.c). A CAD
+ * curve whose length L is below 1 / HOC_LINEAR_SHORT_RATIO of the longest
+ * edge at its nodes has slivers along it (q about sqrt(3) / ratio at best:
+ * 0.17 at ten; the wing root's blunt trailing edge in wing_fuselage, 0.036
+ * long among edges of 5.2: q 0.0065, tangled at order 10); so has a face
+ * whose width L across a triangle with its corners on two of its curves is
+ * below 1 / ratio of the triangle's longest edge, along all of it. The
+ * linear mesh is made again with the size near it HOC_LINEAR_SHORT_SIZE x
+ * L (triangles on it of q about sqrt(3) / 5 = 0.35), growing by
+ * HOC_LINEAR_GRADE per unit of distance (each ring of elements about three
+ * times the last), and kept if it has fewer failed faces, fewer inverted
+ * triangles, or as many and a higher smallest q. A gentler grade (0.5) or
+ * size (L) makes more of its triangles near the curve better, for up to 16
+ * times the elements (impeller_laufrad's 143 short curves alone, among
+ * edges a hundred times longer: 3 540 -> 55 558 elements, against 10 488
+ * with these). */
 #define HOC_LINEAR_SHORT_RATIO 10
 #define HOC_LINEAR_SHORT_SIZE 5
 #define HOC_LINEAR_GRADE 2

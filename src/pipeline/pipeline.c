@@ -69,6 +69,7 @@ void hoc_mesh_options_default(hoc_mesh_options *options) {
   options->measure = HOC_MEASURE_SHAPE;
   options->optimize = 1;
   options->refinements = -1;
+  options->grading = 1;
 }
 
 /* Check the options both pipelines use; run gets a copy (defaults if
@@ -375,6 +376,7 @@ static hoc_status mesh_model_run(const hoc_run *run, hoc_model *model, model_mes
   lo.curvature = o->curvature;
   lo.order = o->order;
   lo.mesher_timeout = o->mesher_timeout;
+  lo.grading = o->grading;
   /* the minimum size before a remeshing lowered it, and the elements of
    * the linear mesh before that remeshing */
   double unlowered_min = lo.size_min;
