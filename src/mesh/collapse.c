@@ -52,9 +52,7 @@ static hoc_status node_point(const hoc_model *model, const hoc_mesh_source *src,
 
 /* Is node i on degenerate curve c (on it, or on a vertex at its end)? */
 static int on_collapsed(const hoc_model *model, const hoc_mesh_source *src, size_t i, int c) {
-  const hoc_cad_curve *cv = &model->curves[c];
-  if (src->dim[i] == HOC_ON_CURVE) return src->entity[i] == c;
-  return src->dim[i] == HOC_ON_VERTEX && (src->entity[i] == cv->v0 || src->entity[i] == cv->v1);
+  return hoc_node_on_curve(model, src->dim[i], src->entity[i], c);
 }
 
 void hoc_mesh_collapse_free(hoc_mesh_collapse *c) {

@@ -296,9 +296,7 @@ done:
 
 /* Is node i of lin on curve c (on it, or at one of its ends)? */
 static int on_curve(const hoc_mesh *lin, size_t i, int c) {
-  const hoc_cad_curve *cv = &lin->model->curves[c];
-  if (lin->dim[i] == HOC_ON_CURVE) return lin->entity[i] == c;
-  return lin->dim[i] == HOC_ON_VERTEX && (lin->entity[i] == cv->v0 || lin->entity[i] == cv->v1);
+  return hoc_node_on_curve(lin->model, lin->dim[i], lin->entity[i], c);
 }
 
 /* Is node i on a curve flagged in is_short (or at its end)? */
@@ -319,11 +317,11 @@ static int on_short(const hoc_mesh *lin, const unsigned char *is_short, size_t i
 static double thin_width(const hoc_mesh *lin, double ratio, const unsigned char *is_short,
                          size_t e, int *k) {
   const size_t *t = lin->conn + 3 * e;
-  double len[3], longest = 0;
+  double longest = 0;
   for (int i = 0; i < 3; ++i) {
     if (lin->dim[t[i]] == HOC_ON_FACE) return 0;
-    len[i] = hoc_dist3(lin->xyz + 3 * t[i], lin->xyz + 3 * t[(i + 1) % 3]);
-    if (len[i] > longest) longest = len[i], *k = i;
+    double len = hoc_dist3(lin->xyz + 3 * t[i], lin->xyz + 3 * t[(i + 1) % 3]);
+    if (len > longest) longest = len, *k = i;
   }
   double e1[3], e2[3], c[3];
   for (int d = 0; d < 3; ++d) {

@@ -598,11 +598,12 @@ static hoc_status generate_once(hoc_model *model, const hoc_linear_options *opti
   gmshOptionSetNumber("Mesh.MeshSizeMax", hmax, &ierr);
   gmshOptionSetNumber("Mesh.MeshSizeMin", hmin, &ierr);
   gmshOptionSetNumber("Mesh.MeshSizeFromCurvature", curv, &ierr);
-  /* (the graded field has the first mesh's sizes: node_sizes in grading.c)
-   * and jumps where the nearest node of the first mesh changes, which
-   * gmsh's integration of 1 / size along the curves resolves to its
-   * precision: at its default 1e-9 the graded meshing of nist_ctc_01 takes
-   * 26 s, at 1e-5 1.3 s (0.02% more triangles) */
+  /* graded: no extension of the curves' sizes into the faces (the field
+   * has the first mesh's sizes: node_sizes in grading.c), and the field
+   * jumps where the first mesh's nearest node changes, which gmsh's
+   * integration of 1 / size along the curves resolves to its precision:
+   * at its default 1e-9 the graded meshing of nist_ctc_01 takes 26 s, at
+   * 1e-5 1.3 s (0.02% more triangles) */
   gmshOptionSetNumber("Mesh.MeshSizeExtendFromBoundary", grading ? 0 : 1, &ierr);
   gmshOptionSetNumber("Mesh.LcIntegrationPrecision", grading ? 1e-5 : 1e-9, &ierr);
   gmshOptionSetNumber("Mesh.ElementOrder", 1, &ierr);

@@ -10,6 +10,13 @@
 /* Node classification: the CAD entity a node lies on. */
 enum { HOC_ON_VERTEX = 0, HOC_ON_CURVE = 1, HOC_ON_FACE = 2 };
 
+/* Is a node classified (dim, entity) on curve c: on the curve itself or
+ * at a vertex at one of its ends? */
+static inline int hoc_node_on_curve(const hoc_model *model, int dim, int entity, int c) {
+  if (dim == HOC_ON_CURVE) return entity == c;
+  return dim == HOC_ON_VERTEX && (entity == model->curves[c].v0 || entity == model->curves[c].v1);
+}
+
 /* A mesh "slot" is a (node, face) pair: the node seen from one face that
  * uses it, with its parameters on that face. Face-interior nodes have one
  * slot; nodes on curves and vertices have one per face around them, except
@@ -54,10 +61,9 @@ struct hoc_mesh {
   signed char *face_orient; /* [n_faces] +1 if element normals follow phi_u x phi_v, -1 if
                                opposite, 0 if the face has no elements */
   size_t n_collapsed;       /* triangles dropped at collapsed sides (collapse.c) */
-  int graded_curves;        /* a linear mesh graded down to this many short CAD curves
-                               and thin faces (grading.c), and gmsh's own mesh's
-                               triangles and min q */
-  int graded_faces;
+  /* a linear mesh graded down to this many short CAD curves and thin faces
+   * (grading.c), and gmsh's own mesh's triangles and min q */
+  int graded_curves, graded_faces;
   size_t ungraded_elements;
   double ungraded_min_q;
   int n_failed_faces;
@@ -379,10 +385,10 @@ hoc_status hoc_linear_grading_make(const hoc_mesh *lin, double ratio, double hmi
                                    double ncurv, const double *face_size,
                                    hoc_linear_grading **g);
 void hoc_linear_grading_free(hoc_linear_grading **g);
-/* Segments of the short curves, the curves; the shortest curve's length. */
+/* Segments of the short curves and thin faces, the curves, the faces; the
+ * shortest curve's length or the least width, the smaller. */
 size_t hoc_linear_grading_segments(const hoc_linear_grading *g);
 int hoc_linear_grading_curves(const hoc_linear_grading *g);
-/* The faces narrower than 1 / ratio of their edges somewhere. */
 int hoc_linear_grading_faces(const hoc_linear_grading *g);
 double hoc_linear_grading_min_size(const hoc_linear_grading *g);
 /* The size at x. */

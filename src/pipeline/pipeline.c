@@ -118,7 +118,8 @@ static hoc_status warn_failed_faces(const hoc_run *run, const hoc_mesh *lin) {
                        nfail, faces, nfail > 30 ? " ..." : "", slow);
 }
 
-/* A linear mesh graded down to short CAD curves (mesh/grading.c). */
+/* A linear mesh graded down to short CAD curves and thin faces
+ * (mesh/grading.c). */
 static hoc_status note_graded(const hoc_run *run, const hoc_mesh *lin) {
   if (!lin->graded_curves && !lin->graded_faces) return HOC_OK;
   char curves[96] = "", faces[96] = "";
