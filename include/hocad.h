@@ -136,7 +136,8 @@ typedef struct hoc_linear_options {
                               and the faces that do not finish count as failed (the mesh's
                               failed faces), as faces that crash gmsh do */
   int grading; /**< 1 (default): a second meshing graded down to short curves and thin
-                    faces where gmsh's has them (hoc_mesh_generate_linear); 0: gmsh's mesh */
+                    faces where gmsh's has them, and edges swapped where that raises the
+                    smaller q of their triangles (hoc_mesh_generate_linear); 0: gmsh's mesh */
 } hoc_linear_options;
 
 /** Fill options with defaults (all "choose", order 1, no progress, grading). */
@@ -153,7 +154,9 @@ void hoc_linear_sizes(const hoc_model *model, const hoc_linear_options *options,
  *  a tenth of the edges at their ends, or faces narrower than a tenth of
  *  their edges, gmsh meshes the model a second time with sizes graded down
  *  to them, and that mesh is kept if it is better (docs/cli.md, `hocad
- *  mesh` rule 10). Faces the kernel cannot mesh, or
+ *  mesh` rule 10); then edges are swapped where that raises the smaller q
+ *  of their two triangles, straight and curved (rule 11). Faces the kernel
+ *  cannot mesh, or
  *  on which its mesher crashes, are skipped and counted in
  *  hoc_mesh_num_failed_faces(); HOC_ERR_MESH if it crashes on the curves
  *  or on every face, HOC_ERR_INTERRUPTED if the child is interrupted

@@ -41,8 +41,9 @@ n_one=$(linear_elements --size-factor 1)
 n_two=$(linear_elements --size-factor 2)
 ok "size factor: 1 ($n_one) is the default ($n_default), 2 ($n_two) coarser" \
   "[ -n '$n_default' ] && [ '$n_one' = '$n_default' ] && [ '${n_two:-0}' -gt 0 ] && [ '${n_two:-0}' -lt \$(( ${n_default:-0} / 2 )) ]"
-# a thin disk (rim 0.04 wide, edges 0.707): graded down to its rim, and
-# said so; --no-grading keeps gmsh's 872 triangles, without the note
+# a thin disk (rim 0.04 wide, edges 0.707): graded down to its rim, edges
+# swapped, and said so; --no-grading keeps gmsh's 872 triangles, without
+# the notes
 disk=$src/tests/data/thin_disk.brep
 "$hocad" mesh "$disk" --order 1 --no-output --json dg.json > /dev/null 2> dg.txt
 "$hocad" mesh "$disk" --order 1 --no-grading --no-output --json dn.json > /dev/null 2> dn.txt
@@ -50,6 +51,8 @@ n_dg=$(grep -o '"name": "linear"[^}]*' dg.json | grep -o '"elements": [0-9]*' | 
 n_dn=$(grep -o '"name": "linear"[^}]*' dn.json | grep -o '"elements": [0-9]*' | cut -d' ' -f2)
 ok "thin disk graded ($n_dg), --no-grading gmsh's mesh ($n_dn)" \
   "[ '${n_dn:-0}' = 872 ] && [ '${n_dg:-0}' -gt 872 ] && grep -q 'and 1 face(s) narrower' dg.txt && ! grep -q 'graded down' dn.txt"
+ok "thin disk: edges swapped, none with --no-grading" \
+  "grep -q 'edge(s) of the linear mesh swapped' dg.txt && ! grep -q 'swapped' dn.txt"
 
 # optimize a mesh read from a file (here the raised, unoptimized one; at
 # order 2 it has 4 tangled elements)

@@ -4,7 +4,8 @@
  * t106_blade_face.brep: gmsh 4.8's default (Frontal-Delaunay) mesh of this
  * B-spline blade face at edges up to 46 has straight triangles inverted on
  * the CAD, on a face that does not fold; hoc_mesh_model meshes the face
- * again with MeshAdapt and its linear stage has none.
+ * again with MeshAdapt and its linear stage has none. hocad's edge swaps
+ * (on by default, off with grading = 0) untangle them too.
  *
  * surf114_face1.brep: a spline patch whose normal reverses along a curve
  * near each end of u (phi_v changes sign there): every mesh of it whose
@@ -83,6 +84,7 @@ static void test_blade(void) {
   hoc_linear_options_default(&lo);
   lo.size_max = BLADE_SIZE;
   lo.order = 2;
+  lo.grading = 0;
   hoc_mesh *lin = NULL;
   CHECK_OK(hoc_mesh_generate_linear(model, &lo, &lin));
   size_t count[4];
@@ -96,6 +98,17 @@ static void test_blade(void) {
     CHECK(count_folds(lin) == 0);
   }
   hoc_mesh_destroy(&lin);
+  /* hocad's edge swaps (mesh/swap.c) untangle them */
+  lo.grading = 1;
+  CHECK_OK(hoc_mesh_generate_linear(model, &lo, &lin));
+  if (lin) {
+    count_kinds(lin, count);
+    printf("blade, edges swapped: %zu swap(s), %zu inverted on the CAD\n", lin->swapped_edges,
+           count[HOC_INVERTED_ON_CAD]);
+    CHECK(lin->swapped_edges > 0 && count[HOC_INVERTED_ON_CAD] == 0);
+  }
+  hoc_mesh_destroy(&lin);
+  lo.grading = 0;
   /* an algorithm out of gmsh's range is refused */
   int bad = 99;
   CHECK_STATUS(hoc_mesh_generate_linear_with(model, &lo, &bad, &lin), HOC_ERR_ARGUMENT);
@@ -108,6 +121,7 @@ static void test_blade(void) {
   o.order = 2;
   o.optimize = 0;
   o.size = BLADE_SIZE;
+  o.grading = 0;
   o.event = on_event;
   o.event_user = &s;
   hoc_mesh *mesh = NULL;

@@ -402,7 +402,8 @@ class Model(_Handle):
             "warp-blend"), measure ("shape", "oddy"), size, size_min,
             curvature (floats, 0: chosen), mesher_timeout (seconds gmsh's
             mesher may take, 0: 300, < 0: no limit), grading (bool, default
-            True: gmsh's mesh graded down to short curves and thin faces),
+            True: gmsh's mesh graded down to short curves and thin faces,
+            and its edges swapped where that raises the smaller q),
             optimize (bool, default True),
             fix_curves (bool), max_iterations (int, 0: default),
             refinements (int, -1: default), equispaced (bool: convert the
@@ -444,7 +445,7 @@ class Model(_Handle):
         ``order``, the order the mesh will be raised to). progress: a
         callable taking an Event ("progress", value the fraction done);
         returning True cancels. grading: False keeps gmsh's mesh as it is
-        (not graded down to short curves and thin faces).
+        (not graded down to short curves and thin faces, no edge swapped).
         """
         cb = _Callback(progress, _linear_event)
         o = C.LinearOptions()

@@ -829,10 +829,10 @@ hoc_status hoc_mesh_generate_linear_ungraded(hoc_model *model, const hoc_linear_
   return generate_sized(model, options, NULL, mesh);
 }
 
-hoc_status hoc_mesh_generate_linear_with(hoc_model *model, const hoc_linear_options *options,
-                                         const int *algorithm, hoc_mesh **mesh) {
-  HOC_TRY(generate_sized(model, options, algorithm, mesh));
-  if (options && !options->grading) return HOC_OK;
+/* *mesh (gmsh's) made again graded down to its short curves and thin
+ * faces, if it has any and that is better. */
+static hoc_status grade(hoc_model *model, const hoc_linear_options *options, const int *algorithm,
+                        hoc_mesh **mesh) {
   /* curves far shorter than the mesh around them, faces narrower: the mesh
    * made again with sizes graded down to them (HOC_LINEAR_SHORT_RATIO) */
   hoc_linear_grading *g = NULL;
@@ -872,6 +872,21 @@ hoc_status hoc_mesh_generate_linear_with(hoc_model *model, const hoc_linear_opti
 done:
   hoc_linear_grading_free(&g);
   hoc_mesh_destroy(&graded);
+  if (status != HOC_OK) hoc_mesh_destroy(mesh);
+  return status;
+}
+
+hoc_status hoc_mesh_generate_linear_with(hoc_model *model, const hoc_linear_options *options,
+                                         const int *algorithm, hoc_mesh **mesh) {
+  HOC_TRY(generate_sized(model, options, algorithm, mesh));
+  if (options && !options->grading) return HOC_OK;
+  HOC_TRY(grade(model, options, algorithm, mesh));
+  /* slivers on the surface that a swap of their edge removes */
+  double away_from_poles;
+  size_t tangled;
+  hoc_status status =
+      linear_quality(*mesh, &tangled, &away_from_poles, &(*mesh)->unswapped_min_q);
+  if (status == HOC_OK) status = hoc_mesh_swap_edges(*mesh, &(*mesh)->swapped_edges);
   if (status != HOC_OK) hoc_mesh_destroy(mesh);
   return status;
 }

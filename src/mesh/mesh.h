@@ -66,6 +66,8 @@ struct hoc_mesh {
   int graded_curves, graded_faces;
   size_t ungraded_elements;
   double ungraded_min_q;
+  size_t swapped_edges;      /* edges of the linear mesh swapped (swap.c), and its min q before */
+  double unswapped_min_q;
   int n_failed_faces;
   int *failed_faces;        /* [n_failed_faces] face indices the mesher could not mesh */
   int timed_out_faces;      /* how many of them gmsh did not finish meshing in
@@ -360,6 +362,26 @@ hoc_status hoc_mesh_generate_linear_with(hoc_model *model, const hoc_linear_opti
  * face remeshed with the minimum lowered to 0.46: 207 triangles from
  * gmsh, 348 557 graded; tests/test_pipeline_remesh_first.c). */
 #define HOC_LINEAR_GRADED_GROWTH 4
+
+/* Edge swaps of the linear mesh (mesh/swap.c): a swap is made where the
+ * smaller q of the two new triangles exceeds the smaller of the two old
+ * by this fraction (a strict gain: each swap raises the pair's minimum,
+ * so the passes end), in at most this many passes over the edges, each
+ * triangle swapped at most once per pass. */
+#define HOC_LINEAR_SWAP_GAIN 1e-3
+#define HOC_LINEAR_SWAP_PASSES 20
+
+/** Swap the interior edges of linear mesh m (order 1) where that raises
+ *  the smaller q of the two triangles on the edge (by HOC_LINEAR_SWAP_GAIN)
+ *  and does not lower the smaller q of the two raised to order 2 (edge
+ *  middles at the middle in (u, v)): triangles of one face on an edge on
+ *  no CAD curve, with no corner at a pole, and never into a triangle with
+ *  all three corners on one CAD curve (raised, its edges along the curve
+ *  meet at 180 degrees). Nodes, slots and lines stay; if the
+ *  mesh then measures more elements tangled than before (the normals of
+ *  curve slots depend on their elements), it is left as it was.
+ *  *n_swapped: the swaps made. */
+hoc_status hoc_mesh_swap_edges(hoc_mesh *m, size_t *n_swapped);
 
 /* Seconds gmsh's mesher may take, by default (hoc_linear_options.
  * mesher_timeout): the whole linear mesh, then each face alone. gmsh's

@@ -136,6 +136,17 @@ static hoc_status note_graded(const hoc_run *run, const hoc_mesh *lin) {
                        lin->ungraded_elements, lin->ungraded_min_q);
 }
 
+/* Edges of the linear mesh swapped (mesh/swap.c). */
+static hoc_status note_swapped(const hoc_run *run, const hoc_mesh *lin) {
+  if (!lin->swapped_edges) return HOC_OK;
+  hoc_quality_stats st;
+  HOC_TRY(hoc_mesh_measure(lin, HOC_MEASURE_SHAPE, NULL, NULL, &st));
+  return hoc_run_event(run, HOC_EVENT_NOTE,
+                       "%zu edge(s) of the linear mesh swapped, each where that raised the "
+                       "smaller q of its two triangles: min q %.4f -> %.4f",
+                       lin->swapped_edges, lin->unswapped_min_q, st.min);
+}
+
 /* Triangles the assembly dropped at collapsed sides (mesh/collapse.c). */
 static hoc_status note_collapsed(const hoc_run *run, const hoc_mesh *lin) {
   if (!lin->n_collapsed) return HOC_OK;
@@ -390,6 +401,7 @@ static hoc_status mesh_model_run(const hoc_run *run, hoc_model *model, model_mes
     HOC_TRY_GOTO(warn_failed_faces(run, m->lin), done);
     HOC_TRY_GOTO(note_collapsed(run, m->lin), done);
     HOC_TRY_GOTO(note_graded(run, m->lin), done);
+    HOC_TRY_GOTO(note_swapped(run, m->lin), done);
     HOC_TRY_GOTO(hoc_run_stage(run, r, "linear", m->lin, t_lin, NULL, NULL), done);
     *final = m->lin;
     if (o->order > 1) {
