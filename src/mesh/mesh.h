@@ -374,8 +374,9 @@ hoc_status hoc_mesh_generate_linear_with(hoc_model *model, const hoc_linear_opti
 /** Swap the interior edges of linear mesh m (order 1) where that raises
  *  the smaller q of the two triangles on the edge (by HOC_LINEAR_SWAP_GAIN)
  *  and does not lower the smaller q of the two raised to order 2 (edge
- *  middles at the middle in (u, v)): triangles of one face on an edge on
- *  no CAD curve, with no corner at a pole, and never into a triangle with
+ *  middles at the middle in (u, v)): valid triangles (none inverted on
+ *  the CAD) of one face on an edge on no CAD curve, with no corner at a
+ *  pole, and never into a triangle with
  *  all three corners on one CAD curve (raised, its edges along the curve
  *  meet at 180 degrees). Nodes, slots and lines stay; if the
  *  mesh then measures more elements tangled than before (the normals of

@@ -100,7 +100,11 @@ static hoc_status try_swap(swapper *S, hoc_hash *edges, size_t e, int k, size_t 
   if (c == d || hoc_hash_get(edges, hoc_pair_key(c, d)) != SIZE_MAX) return HOC_OK;
   size_t t1[3] = {a, d, c}, t2[3] = {d, b, c};
   size_t s1[3] = {sa, sd, sc}, s2[3] = {sd, sb, sc};
+  /* a triangle inverted on the CAD: its face is meshed again with gmsh's
+   * other algorithms (pipeline/repair.c), whose mesh of the whole face
+   * serves high orders better than a local swap */
   double before = fmin(S->q[e], S->q[f]);
+  if (!(before > 0)) return HOC_OK;
   double q1 = triangle_q(S, t1, s1);
   if (!(q1 > before * (1 + HOC_LINEAR_SWAP_GAIN))) return HOC_OK;
   double q2 = triangle_q(S, t2, s2);
