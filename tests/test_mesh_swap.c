@@ -23,6 +23,7 @@
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #define DATA HOC_SOURCE_DIR "/tests/data/"
@@ -65,6 +66,24 @@ static double total_area(const hoc_mesh *m) {
   return s;
 }
 
+/* A linear source of one face's triangles (par may be NULL: located). */
+static hoc_mesh_source linear_source(size_t n_nodes, const double *xyz, const double *par,
+                                     const signed char *dim, const int *ent, size_t n_elems,
+                                     const size_t *conn, const int *face) {
+  hoc_mesh_source src = {0};
+  src.order = 1;
+  src.nodeset = HOC_NODES_EQUISPACED;
+  src.n_nodes = n_nodes;
+  src.xyz = xyz;
+  src.param = par;
+  src.dim = dim;
+  src.entity = ent;
+  src.n_elems = n_elems;
+  src.conn = conn;
+  src.elem_face = face;
+  return src;
+}
+
 static void test_slivers(void) {
   hoc_model *model = NULL;
   CHECK_OK(hoc_cad_create_analytic(HOC_ANALYTIC_PLANE, 1.0, 0.0, &model));
@@ -95,17 +114,8 @@ static void test_slivers(void) {
   size_t conn[] = {V0, V1, B, V1, R,  B, V1, V2, R, V2, T, R, V2, V3, T,
                    V3, L,  T, V3, V0, L, V0, B,  L, L,  B, R, R,  T,  L};
   int face[10] = {0};
-  hoc_mesh_source src = {.order = 1,
-                         .nodeset = HOC_NODES_EQUISPACED,
-                         .n_nodes = N,
-                         .xyz = xyz,
-                         .param = par,
-                         .has_param = has,
-                         .dim = dim,
-                         .entity = ent,
-                         .n_elems = 10,
-                         .conn = conn,
-                         .elem_face = face};
+  hoc_mesh_source src = linear_source(N, xyz, par, dim, ent, 10, conn, face);
+  src.has_param = has;
   hoc_mesh *lin = NULL;
   CHECK_OK(hoc_mesh_assemble(model, &src, 1e-9, &lin));
   if (!lin) goto done;
@@ -170,10 +180,38 @@ static double rim_angle(int i) {
   return t + (two_pi - 2 * t) * (i - 1) / (N_RIM - 2);
 }
 
-/* Does element e have a corner at P0 (node 0)? */
-static int at_p0(const hoc_mesh *m, int e) {
-  const size_t *c = m->conn + (size_t)e * (size_t)m->np;
-  return c[0] == 0 || c[1] == 0 || c[2] == 0;
+/* The smaller q of m's elements with a corner at node `at` (all if
+ * SIZE_MAX). */
+static double min_q_at(const hoc_mesh *m, size_t at) {
+  double *q = calloc(m->n_elems, sizeof *q), mn = INFINITY;
+  CHECK(q != NULL);
+  if (!q) return -1;
+  CHECK_OK(hoc_mesh_measure(m, HOC_MEASURE_SHAPE, q, NULL, NULL));
+  for (size_t e = 0; e < m->n_elems; ++e) {
+    const size_t *c = m->conn + e * (size_t)m->np;
+    if (at == SIZE_MAX || c[0] == at || c[1] == at || c[2] == at) mn = fmin(mn, q[e]);
+  }
+  free(q);
+  return mn;
+}
+
+/* src assembled, its edges swapped if `swap` (*swaps), and the min q of
+ * its elements at node `at` (min_q_at), straight (*q1) and raised to
+ * order p (*qp). */
+static void swap_and_measure(hoc_model *model, const hoc_mesh_source *src, double tol, int swap,
+                             int p, size_t at, size_t *swaps, double *q1, double *qp) {
+  hoc_mesh *lin = NULL, *ho = NULL;
+  *q1 = *qp = -1;
+  *swaps = SIZE_MAX;
+  CHECK_OK(hoc_mesh_assemble(model, src, tol, &lin));
+  if (!lin) return;
+  *swaps = 0;
+  if (swap) CHECK_OK(hoc_mesh_swap_edges(lin, swaps));
+  *q1 = min_q_at(lin, at);
+  CHECK_OK(hoc_mesh_elevate(lin, p, HOC_NODES_EQUISPACED, &ho));
+  if (ho) *qp = min_q_at(ho, at);
+  hoc_mesh_destroy(&ho);
+  hoc_mesh_destroy(&lin);
 }
 
 /* The fan of six triangles around X on the top face, or with edge X-P0
@@ -216,34 +254,8 @@ static void disk_fan(hoc_model *model, int ear, int swap, size_t *swapped, doubl
   int face[N_RIM];
   for (int i = 0; i < N_RIM; ++i)
     face[i] = f;
-  hoc_mesh_source src = {.order = 1,
-                         .nodeset = HOC_NODES_EQUISPACED,
-                         .n_nodes = N,
-                         .xyz = xyz,
-                         .dim = dim,
-                         .entity = ent,
-                         .n_elems = N_RIM,
-                         .conn = conn,
-                         .elem_face = face};
-  hoc_mesh *lin = NULL, *ho = NULL;
-  CHECK_OK(hoc_mesh_assemble(model, &src, 1e-6, &lin));
-  if (!lin) return;
-  *swapped = 0;
-  if (swap) CHECK_OK(hoc_mesh_swap_edges(lin, swapped));
-  *min_q = INFINITY;
-  double q[N_RIM];
-  CHECK_OK(hoc_mesh_measure(lin, HOC_MEASURE_SHAPE, q, NULL, NULL));
-  for (int e = 0; e < N_RIM; ++e)
-    if (at_p0(lin, e)) *min_q = fmin(*min_q, q[e]);
-  CHECK_OK(hoc_mesh_elevate(lin, 3, HOC_NODES_EQUISPACED, &ho));
-  if (ho) {
-    CHECK_OK(hoc_mesh_measure(ho, HOC_MEASURE_SHAPE, q, NULL, NULL));
-    *min_q3 = INFINITY;
-    for (int e = 0; e < N_RIM; ++e)
-      if (at_p0(ho, e)) *min_q3 = fmin(*min_q3, q[e]);
-  }
-  hoc_mesh_destroy(&ho);
-  hoc_mesh_destroy(&lin);
+  hoc_mesh_source src = linear_source(N, xyz, NULL, dim, ent, N_RIM, conn, face);
+  swap_and_measure(model, &src, 1e-6, swap, 3, 0, swapped, min_q, min_q3);
 }
 
 static void test_ears(void) {
@@ -298,33 +310,8 @@ static void bend_pair(hoc_model *model, int swapped_pair, int swap, size_t *swap
    * orientation follows the elements */
   size_t pair[2][6] = {{A, B, C, B, A, D_}, {A, D_, C, D_, B, C}};
   int face[2] = {0, 0};
-  hoc_mesh_source src = {.order = 1,
-                         .nodeset = HOC_NODES_EQUISPACED,
-                         .n_nodes = N,
-                         .xyz = xyz,
-                         .param = par,
-                         .dim = dim,
-                         .entity = ent,
-                         .n_elems = 2,
-                         .conn = pair[swapped_pair],
-                         .elem_face = face};
-  hoc_mesh *lin = NULL, *ho = NULL;
-  *q1 = *q2 = -1;
-  *swaps = SIZE_MAX;
-  CHECK_OK(hoc_mesh_assemble(model, &src, 1e-9, &lin));
-  if (!lin) return;
-  *swaps = 0;
-  if (swap) CHECK_OK(hoc_mesh_swap_edges(lin, swaps));
-  hoc_quality_stats st;
-  CHECK_OK(hoc_mesh_measure(lin, HOC_MEASURE_SHAPE, NULL, NULL, &st));
-  *q1 = st.min;
-  CHECK_OK(hoc_mesh_elevate(lin, 2, HOC_NODES_EQUISPACED, &ho));
-  if (ho) {
-    CHECK_OK(hoc_mesh_measure(ho, HOC_MEASURE_SHAPE, NULL, NULL, &st));
-    *q2 = st.min;
-  }
-  hoc_mesh_destroy(&ho);
-  hoc_mesh_destroy(&lin);
+  hoc_mesh_source src = linear_source(N, xyz, par, dim, ent, 2, pair[swapped_pair], face);
+  swap_and_measure(model, &src, 1e-9, swap, 2, SIZE_MAX, swaps, q1, q2);
   if (!swapped_pair && !swap) { /* the straight q in closed form */
     CHECK_NEAR(*q1, straight_q(xyz + 3 * A, xyz + 3 * B, xyz + 3 * C), 1e-9);
   }
