@@ -123,7 +123,7 @@ static void test_slivers(void) {
   CHECK_OK(hoc_mesh_measure(lin, HOC_MEASURE_SHAPE, NULL, NULL, &st0));
   double q_long = planar_q(uv[L], uv[B], uv[R]), q_short = planar_q(uv[L], uv[B], uv[T]);
   size_t swapped = 0;
-  CHECK_OK(hoc_mesh_swap_edges(lin, &swapped));
+  CHECK_OK(hoc_mesh_swap_edges(lin, &swapped, NULL));
   CHECK_OK(hoc_mesh_measure(lin, HOC_MEASURE_SHAPE, NULL, NULL, &st1));
   size_t lbt = find_triangle(lin, L, B, T), brt = find_triangle(lin, B, R, T);
   printf("slivers: %zu swap(s), min q %.4f -> %.4f (closed form %.4f -> %.4f), area %.15f\n",
@@ -206,7 +206,7 @@ static void swap_and_measure(hoc_model *model, const hoc_mesh_source *src, doubl
   CHECK_OK(hoc_mesh_assemble(model, src, tol, &lin));
   if (!lin) return;
   *swaps = 0;
-  if (swap) CHECK_OK(hoc_mesh_swap_edges(lin, swaps));
+  if (swap) CHECK_OK(hoc_mesh_swap_edges(lin, swaps, NULL));
   *q1 = min_q_at(lin, at);
   CHECK_OK(hoc_mesh_elevate(lin, p, HOC_NODES_EQUISPACED, &ho));
   if (ho) *qp = min_q_at(ho, at);

@@ -882,11 +882,7 @@ hoc_status hoc_mesh_generate_linear_with(hoc_model *model, const hoc_linear_opti
   if (options && !options->grading) return HOC_OK;
   HOC_TRY(grade(model, options, algorithm, mesh));
   /* slivers on the surface that a swap of their edge removes */
-  double away_from_poles;
-  size_t tangled;
-  hoc_status status =
-      linear_quality(*mesh, &tangled, &away_from_poles, &(*mesh)->unswapped_min_q);
-  if (status == HOC_OK) status = hoc_mesh_swap_edges(*mesh, &(*mesh)->swapped_edges);
+  hoc_status status = hoc_mesh_swap_edges(*mesh, &(*mesh)->swapped_edges, (*mesh)->swap_min_q);
   if (status != HOC_OK) hoc_mesh_destroy(mesh);
   return status;
 }

@@ -66,8 +66,8 @@ struct hoc_mesh {
   int graded_curves, graded_faces;
   size_t ungraded_elements;
   double ungraded_min_q;
-  size_t swapped_edges;      /* edges of the linear mesh swapped (swap.c), and its min q before */
-  double unswapped_min_q;
+  size_t swapped_edges;      /* edges of the linear mesh swapped (swap.c), and its min q */
+  double swap_min_q[2];      /* before and after */
   int n_failed_faces;
   int *failed_faces;        /* [n_failed_faces] face indices the mesher could not mesh */
   int timed_out_faces;      /* how many of them gmsh did not finish meshing in
@@ -381,8 +381,9 @@ hoc_status hoc_mesh_generate_linear_with(hoc_model *model, const hoc_linear_opti
  *  meet at 180 degrees). Nodes, slots and lines stay; if the
  *  mesh then measures more elements tangled than before (the normals of
  *  curve slots depend on their elements), it is left as it was.
- *  *n_swapped: the swaps made. */
-hoc_status hoc_mesh_swap_edges(hoc_mesh *m, size_t *n_swapped);
+ *  *n_swapped: the swaps made; min_q (NULL, or [2]): the mesh's min q
+ *  before and after. */
+hoc_status hoc_mesh_swap_edges(hoc_mesh *m, size_t *n_swapped, double *min_q);
 
 /* Seconds gmsh's mesher may take, by default (hoc_linear_options.
  * mesher_timeout): the whole linear mesh, then each face alone. gmsh's

@@ -21,6 +21,7 @@ typedef struct swapper {
   const hoc_quality_tables *t, *t2; /* orders 1 and 2 */
   const double *normal;             /* [n_slots][3] */
   double *q;                        /* [n_elems] current q */
+  hoc_hash lines;                   /* the end nodes of each line on a CAD curve */
 } swapper;
 
 /* q of a straight triangle of mesh corners with slots sl[3]. */
@@ -146,12 +147,8 @@ static hoc_status try_swap(swapper *S, hoc_hash *edges, size_t e, int k, size_t 
 static hoc_status swap_pass(swapper *S, size_t *mate, unsigned char *touched, size_t *n_swapped) {
   hoc_mesh *m = S->m;
   size_t ne = m->n_elems;
-  hoc_hash edges = {0}, lines = {0};
+  hoc_hash edges = {0};
   hoc_status status = hoc_hash_init(&edges, 3 * ne);
-  if (status == HOC_OK) status = hoc_hash_init(&lines, m->n_lines);
-  for (size_t l = 0; l < m->n_lines && status == HOC_OK; ++l)
-    status = hoc_hash_insert(&lines, hoc_pair_key(m->line_conn[2 * l], m->line_conn[2 * l + 1]), l,
-                             NULL, NULL);
   /* mate[3 e + k]: the other side of element e's edge k, SIZE_MAX if none
    * or on a curve, SIZE_MAX - 1 if more than two elements share it */
   for (size_t i = 0; i < 3 * ne; ++i)
@@ -160,7 +157,7 @@ static hoc_status swap_pass(swapper *S, size_t *mate, unsigned char *touched, si
     size_t e = i / 3, k = i % 3;
     size_t a = m->conn[3 * e + k], b = m->conn[3 * e + (k + 1) % 3];
     uint64_t key = hoc_pair_key(a, b);
-    if (hoc_hash_get(&lines, key) != SIZE_MAX) continue;
+    if (hoc_hash_get(&S->lines, key) != SIZE_MAX) continue;
     int found = 0;
     size_t first;
     status = hoc_hash_insert(&edges, key, i, &found, &first);
@@ -185,17 +182,24 @@ static hoc_status swap_pass(swapper *S, size_t *mate, unsigned char *touched, si
     }
   }
   hoc_hash_free(&edges);
-  hoc_hash_free(&lines);
   return status;
 }
 
-hoc_status hoc_mesh_swap_edges(hoc_mesh *m, size_t *n_swapped) {
+/* The smallest of q[n]. */
+static double smallest(const double *q, size_t n) {
+  double mn = INFINITY;
+  for (size_t e = 0; e < n; ++e)
+    mn = fmin(mn, q[e]);
+  return mn;
+}
+
+hoc_status hoc_mesh_swap_edges(hoc_mesh *m, size_t *n_swapped, double *min_q) {
   HOC_CHECK(m && n_swapped, HOC_ERR_ARGUMENT, "NULL argument");
   HOC_CHECK(m->order == 1, HOC_ERR_ARGUMENT, "edge swaps need a linear mesh, not order %d",
             m->order);
   *n_swapped = 0;
   size_t ne = m->n_elems;
-  swapper S = {m, NULL, NULL, NULL, NULL};
+  swapper S = {m, NULL, NULL, NULL, NULL, {0}};
   HOC_TRY(hoc_quality_tables_get(1, m->nodeset, &S.t));
   HOC_TRY(hoc_quality_tables_get(2, HOC_NODES_EQUISPACED, &S.t2));
   double *normal = NULL;
@@ -210,6 +214,12 @@ hoc_status hoc_mesh_swap_edges(hoc_mesh *m, size_t *n_swapped) {
   HOC_ALLOC_GOTO(conn0, 3 * ne + 1, done);
   HOC_ALLOC_GOTO(slot0, 3 * ne + 1, done);
   HOC_ALLOC_GOTO(uv0, 6 * ne + 1, done);
+  HOC_TRY_GOTO(hoc_hash_init(&S.lines, m->n_lines), done);
+  for (size_t l = 0; l < m->n_lines; ++l)
+    HOC_TRY_GOTO(hoc_hash_insert(&S.lines,
+                                 hoc_pair_key(m->line_conn[2 * l], m->line_conn[2 * l + 1]), l,
+                                 NULL, NULL),
+                 done);
   memcpy(conn0, m->conn, 3 * ne * sizeof *conn0);
   memcpy(slot0, m->elem_slot, 3 * ne * sizeof *slot0);
   memcpy(uv0, m->elem_uv, 6 * ne * sizeof *uv0);
@@ -219,6 +229,7 @@ hoc_status hoc_mesh_swap_edges(hoc_mesh *m, size_t *n_swapped) {
   size_t tangled0 = 0;
   for (size_t e = 0; e < ne; ++e)
     tangled0 += S.q[e] == 0.0;
+  if (min_q) min_q[0] = min_q[1] = smallest(S.q, ne);
   for (int pass = 0; pass < HOC_LINEAR_SWAP_PASSES; ++pass) {
     size_t before = *n_swapped;
     HOC_TRY_GOTO(swap_pass(&S, mate, touched, n_swapped), done);
@@ -236,9 +247,12 @@ hoc_status hoc_mesh_swap_edges(hoc_mesh *m, size_t *n_swapped) {
       memcpy(m->elem_slot, slot0, 3 * ne * sizeof *slot0);
       memcpy(m->elem_uv, uv0, 6 * ne * sizeof *uv0);
       *n_swapped = 0;
+    } else if (min_q) {
+      min_q[1] = smallest(S.q, ne);
     }
   }
 done:
+  hoc_hash_free(&S.lines);
   free(normal);
   free(S.q);
   free(mate);

@@ -139,12 +139,10 @@ static hoc_status note_graded(const hoc_run *run, const hoc_mesh *lin) {
 /* Edges of the linear mesh swapped (mesh/swap.c). */
 static hoc_status note_swapped(const hoc_run *run, const hoc_mesh *lin) {
   if (!lin->swapped_edges) return HOC_OK;
-  hoc_quality_stats st;
-  HOC_TRY(hoc_mesh_measure(lin, HOC_MEASURE_SHAPE, NULL, NULL, &st));
   return hoc_run_event(run, HOC_EVENT_NOTE,
                        "%zu edge(s) of the linear mesh swapped, each where that raised the "
                        "smaller q of its two triangles: min q %.4f -> %.4f",
-                       lin->swapped_edges, lin->unswapped_min_q, st.min);
+                       lin->swapped_edges, lin->swap_min_q[0], lin->swap_min_q[1]);
 }
 
 /* Triangles the assembly dropped at collapsed sides (mesh/collapse.c). */
