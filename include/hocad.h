@@ -136,7 +136,8 @@ typedef struct hoc_linear_options {
                               and the faces that do not finish count as failed (the mesh's
                               failed faces), as faces that crash gmsh do */
   int grading; /**< 1 (default): a second meshing graded down to short curves and thin
-                    faces where gmsh's has them, and edges swapped where that raises the
+                    faces where gmsh's has them (within 4 x the first's time + 10 s),
+                    and edges swapped where that raises the
                     smaller q of their triangles (hoc_mesh_generate_linear); 0: gmsh's mesh */
 } hoc_linear_options;
 

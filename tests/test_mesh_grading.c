@@ -228,8 +228,46 @@ out:
   hoc_model_destroy(&model);
 }
 
+/* The graded meshing's budget (HOC_LINEAR_GRADED_SECONDS). Its class: a
+ * face that pinches to a point asks sizes near nothing at its tip, and
+ * gmsh's mesher can then take far longer than the mesh is worth. Past
+ * the budget gmsh's first mesh stays, with a note, and the model does not
+ * remember the faces as failed (a later meshing at gmsh's sizes tries
+ * them). The thin disk's graded meshing does not fit in a millisecond;
+ * without a budget it is kept. */
+static void test_budget(void) {
+  hoc_model *model = NULL;
+  hoc_mesh *cut = NULL, *free_run = NULL;
+  CHECK_OK(hoc_model_open(DATA "thin_disk.brep", &model));
+  if (!model) return;
+  hoc_linear_options lo;
+  hoc_linear_options_default(&lo);
+  lo.order = 2;
+  CHECK_OK(hoc_mesh_generate_linear_ungraded(model, &lo, &cut));
+  CHECK_OK(hoc_mesh_generate_linear_ungraded(model, &lo, &free_run));
+  if (!cut || !free_run) goto out;
+  size_t n0 = hoc_mesh_num_elements(cut);
+  CHECK_OK(hoc_mesh_grade(model, &lo, NULL, 1e-3, &cut));
+  CHECK_OK(hoc_mesh_grade(model, &lo, NULL, 0, &free_run));
+  if (!cut || !free_run) goto out;
+  printf("budget 1 ms: %zu triangles (gmsh's %zu), graded faces %d; no budget: %zu, graded "
+         "faces %d\n",
+         hoc_mesh_num_elements(cut), n0, cut->graded_faces, hoc_mesh_num_elements(free_run),
+         free_run->graded_faces);
+  CHECK(hoc_mesh_num_elements(cut) == n0 && cut->graded_faces == 0);
+  CHECK(cut->graded_budget == 1e-3);
+  CHECK(cut->n_failed_faces == 0 && !model->mesher_failed);
+  CHECK(free_run->graded_faces == 1 && free_run->graded_budget == 0);
+  CHECK(hoc_mesh_num_elements(free_run) > n0);
+out:
+  hoc_mesh_destroy(&cut);
+  hoc_mesh_destroy(&free_run);
+  hoc_model_destroy(&model);
+}
+
 int main(void) {
   test_short_curve();
   test_thin_face();
+  test_budget();
   return test_report();
 }

@@ -563,10 +563,14 @@ static hoc_status remember_failures(hoc_model *model, const unsigned char *skip,
 
 /* One linear mesh with gmsh's current size settings and the faces'
  * algorithms (NULL: gmsh's default everywhere); model and mesh checked by
- * the caller. */
+ * the caller. A graded meshing (grading not NULL) has budget seconds at
+ * most (within the mesher's limit), and a crash or a time-out in it fails
+ * at once (*timed_out: whether it ran out of time), no face probed or
+ * remembered: a face that fails with the graded sizes alone is not one
+ * gmsh cannot mesh. */
 static hoc_status generate_once(hoc_model *model, const hoc_linear_options *options,
                                 const int *algorithm, const hoc_linear_grading *grading,
-                                hoc_mesh **mesh) {
+                                double budget, int *timed_out, hoc_mesh **mesh) {
   hoc_linear_options o;
   hoc_linear_options_default(&o);
   if (options) o = *options;
@@ -617,6 +621,7 @@ static hoc_status generate_once(hoc_model *model, const hoc_linear_options *opti
   int n_timed_out = 0;
   double timeout = o.mesher_timeout < 0 ? 0 : o.mesher_timeout > 0 ? o.mesher_timeout
                                                                    : HOC_MESHER_TIMEOUT;
+  if (grading && budget > 0 && (timeout <= 0 || budget < timeout)) timeout = budget;
   unsigned char *skip = NULL;
   int n_skipped = 0;
   HOC_TRY_GOTO(known_failures(model, timeout, &skip, &n_skipped), done);
@@ -625,7 +630,9 @@ static hoc_status generate_once(hoc_model *model, const hoc_linear_options *opti
     goto done;
   }
   run_outcome run = run_mesher(model, algorithm, timeout, skip, NULL, NULL, &p, &err, &end);
-  if (run == RUN_CRASHED && !hoc_signal_is_interrupt(end.signal) && model->n_faces > 1) {
+  if (grading && run == RUN_CRASHED && timed_out) *timed_out = end.signal == FACE_TIMED_OUT;
+  if (!grading && run == RUN_CRASHED && !hoc_signal_is_interrupt(end.signal) &&
+      model->n_faces > 1) {
     /* mesh the faces that neither crash gmsh nor keep it from finishing
      * in time; the others count as failed */
     hoc_child_end first = end;
@@ -738,7 +745,8 @@ static hoc_status generate_sized(hoc_model *model, const hoc_linear_options *opt
     HOC_CHECK(algorithm[f] >= 0 && algorithm[f] <= HOC_GMSH_ALGORITHM_MAX, HOC_ERR_ARGUMENT,
               "meshing algorithm %d of face %d is not one of gmsh's (0..%d)", algorithm[f],
               model->faces[f].tag, HOC_GMSH_ALGORITHM_MAX);
-  if (!options || !options->face_size) return generate_once(model, options, algorithm, NULL, mesh);
+  if (!options || !options->face_size)
+    return generate_once(model, options, algorithm, NULL, 0, NULL, mesh);
   /* faces meshed finer: the bound on the face and on its boundary curves */
   sizing s = {0};
   for (int f = 0; f < model->n_faces; ++f) {
@@ -769,7 +777,7 @@ static hoc_status generate_sized(hoc_model *model, const hoc_linear_options *opt
   int ierr = 0;
   gmshModelMeshSetSizeCallback(size_at, &s, &ierr);
   status = ierr ? HOC_ERROR(HOC_ERR_MESH, "gmsh refused the mesh size callback")
-                : generate_once(model, options, algorithm, NULL, mesh);
+                : generate_once(model, options, algorithm, NULL, 0, NULL, mesh);
   gmshModelMeshRemoveSizeCallback(&ierr);
 done:
   free(s.face_size);
@@ -829,10 +837,8 @@ hoc_status hoc_mesh_generate_linear_ungraded(hoc_model *model, const hoc_linear_
   return generate_sized(model, options, NULL, mesh);
 }
 
-/* *mesh (gmsh's) made again graded down to its short curves and thin
- * faces, if it has any and that is better. */
-static hoc_status grade(hoc_model *model, const hoc_linear_options *options, const int *algorithm,
-                        hoc_mesh **mesh) {
+hoc_status hoc_mesh_grade(hoc_model *model, const hoc_linear_options *options,
+                          const int *algorithm, double budget, hoc_mesh **mesh) {
   /* curves far shorter than the mesh around them, faces narrower: the mesh
    * made again with sizes graded down to them (HOC_LINEAR_SHORT_RATIO) */
   hoc_linear_grading *g = NULL;
@@ -852,7 +858,9 @@ static hoc_status grade(hoc_model *model, const hoc_linear_options *options, con
     status = HOC_ERROR(HOC_ERR_MESH, "gmsh refused the mesh size callback");
     goto done;
   }
-  status = generate_once(model, options, algorithm, g, &graded);
+  int timed_out = 0;
+  status = generate_once(model, options, algorithm, g, budget, &timed_out, &graded);
+  if (timed_out) (*mesh)->graded_budget = budget;
   gmshModelMeshRemoveSizeCallback(&ierr);
   if (status == HOC_ERR_INTERRUPTED || status == HOC_ERR_MEMORY) goto done;
   /* (a graded mesh gmsh fails on leaves the first) */
@@ -878,9 +886,11 @@ done:
 
 hoc_status hoc_mesh_generate_linear_with(hoc_model *model, const hoc_linear_options *options,
                                          const int *algorithm, hoc_mesh **mesh) {
+  double t0 = hoc_now();
   HOC_TRY(generate_sized(model, options, algorithm, mesh));
   if (options && !options->grading) return HOC_OK;
-  HOC_TRY(grade(model, options, algorithm, mesh));
+  double budget = HOC_LINEAR_GRADED_GROWTH * (hoc_now() - t0) + HOC_LINEAR_GRADED_SECONDS;
+  HOC_TRY(hoc_mesh_grade(model, options, algorithm, budget, mesh));
   /* slivers on the surface that a swap of their edge removes */
   hoc_status status = hoc_mesh_swap_edges(*mesh, &(*mesh)->swapped_edges, (*mesh)->swap_min_q);
   if (status != HOC_OK) hoc_mesh_destroy(mesh);

@@ -66,6 +66,7 @@ struct hoc_mesh {
   int graded_curves, graded_faces;
   size_t ungraded_elements;
   double ungraded_min_q;
+  double graded_budget;      /* > 0: the graded meshing did not finish in these seconds */
   size_t swapped_edges;      /* edges of the linear mesh swapped (swap.c), and its min q */
   double swap_min_q[2];      /* before and after */
   int n_failed_faces;
@@ -362,6 +363,15 @@ hoc_status hoc_mesh_generate_linear_with(hoc_model *model, const hoc_linear_opti
  * face remeshed with the minimum lowered to 0.46: 207 triangles from
  * gmsh, 348 557 graded; tests/test_pipeline_remesh_first.c). */
 #define HOC_LINEAR_GRADED_GROWTH 4
+/* The graded meshing may take this many times the first meshing's time,
+ * plus HOC_LINEAR_GRADED_SECONDS, else gmsh's mesh is kept: where a face
+ * pinches to a point, the widths of its triangles near the tip, and so
+ * the sizes asked there, go to almost nothing, and gmsh's mesher can take
+ * far longer than the mesh is worth (surf114 at twice the default size:
+ * 3 s, then no graded mesh within 600 s). On ../shared/cad at the default
+ * size and twice it, the graded meshing takes 1.5 times the first's at
+ * most. */
+#define HOC_LINEAR_GRADED_SECONDS 10.0
 
 /* Edge swaps of the linear mesh (mesh/swap.c): a swap is made where the
  * smaller q of the two new triangles exceeds the smaller of the two old
@@ -398,6 +408,14 @@ hoc_status hoc_mesh_swap_edges(hoc_mesh *m, size_t *n_swapped, double *min_q);
  * options' sizes alone (tests take it as the mesh gmsh makes). */
 hoc_status hoc_mesh_generate_linear_ungraded(hoc_model *model, const hoc_linear_options *options,
                                              hoc_mesh **mesh);
+
+/* *mesh (gmsh's, made with these options and algorithms) made again
+ * graded down to its short curves and thin faces, if it has any, that
+ * meshing finishes in budget seconds (else (*mesh)->graded_budget is set)
+ * and its mesh is better (fewer failed faces, fewer inverted triangles,
+ * or a higher min q away from poles; HOC_LINEAR_GRADED_GROWTH). */
+hoc_status hoc_mesh_grade(hoc_model *model, const hoc_linear_options *options,
+                          const int *algorithm, double budget, hoc_mesh **mesh);
 
 typedef struct hoc_linear_grading hoc_linear_grading;
 /* The size field of a mesh made again from lin, made by gmsh with sizes

@@ -121,6 +121,13 @@ static hoc_status warn_failed_faces(const hoc_run *run, const hoc_mesh *lin) {
 /* A linear mesh graded down to short CAD curves and thin faces
  * (mesh/grading.c). */
 static hoc_status note_graded(const hoc_run *run, const hoc_mesh *lin) {
+  if (lin->graded_budget > 0)
+    return hoc_run_event(run, HOC_EVENT_NOTE,
+                         "gmsh did not finish the linear mesh graded down to short curves and "
+                         "thin faces in %.1f s (%g x its first meshing + %g s): its first mesh "
+                         "is kept",
+                         lin->graded_budget, (double)HOC_LINEAR_GRADED_GROWTH,
+                         HOC_LINEAR_GRADED_SECONDS);
   if (!lin->graded_curves && !lin->graded_faces) return HOC_OK;
   char curves[96] = "", faces[96] = "";
   if (lin->graded_curves)
