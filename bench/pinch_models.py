@@ -16,10 +16,8 @@ import math
 import os
 import sys
 
-import gmsh
-
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from synthetic_models import curves_of, make  # noqa: E402
+from synthetic_models import curves_of, main  # noqa: E402
 
 
 def crescent_plate(occ):
@@ -112,19 +110,5 @@ MODELS = [
 ]
 
 
-def main():
-    if len(sys.argv) != 2 or sys.argv[1].startswith("-"):
-        sys.exit(__doc__.split("SPDX")[0].rstrip())
-    out = sys.argv[1]
-    os.makedirs(out, exist_ok=True)
-    gmsh.initialize()
-    gmsh.option.setNumber("General.Terminal", 0)
-    try:
-        for name, build in MODELS:
-            make(gmsh.model.occ, name, build, out)
-    finally:
-        gmsh.finalize()
-
-
 if __name__ == "__main__":
-    main()
+    main(MODELS, __doc__)

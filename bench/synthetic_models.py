@@ -291,19 +291,21 @@ MODELS = [
 ]
 
 
-def main():
+def main(models, doc):
+    """Write models (name, build) to the directory the command line names;
+    doc: the usage printed otherwise."""
     if len(sys.argv) != 2 or sys.argv[1].startswith("-"):
-        sys.exit(__doc__.split("SPDX")[0].rstrip())
+        sys.exit(doc.split("SPDX")[0].rstrip())
     out = sys.argv[1]
     os.makedirs(out, exist_ok=True)
     gmsh.initialize()
     gmsh.option.setNumber("General.Terminal", 0)
     try:
-        for name, build in MODELS:
+        for name, build in models:
             make(gmsh.model.occ, name, build, out)
     finally:
         gmsh.finalize()
 
 
 if __name__ == "__main__":
-    main()
+    main(MODELS, __doc__)
