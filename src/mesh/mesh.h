@@ -412,8 +412,9 @@ hoc_status hoc_mesh_generate_linear_ungraded(hoc_model *model, const hoc_linear_
 /* *mesh (gmsh's, made with these options and algorithms) made again
  * graded down to its short curves and thin faces, if it has any, that
  * meshing finishes in budget seconds (0: no budget; else
- * (*mesh)->graded_budget is set) and its mesh is better (fewer failed faces, fewer inverted triangles,
- * or a higher min q away from poles; HOC_LINEAR_GRADED_GROWTH). */
+ * (*mesh)->graded_budget is set) and its mesh is better (fewer failed
+ * faces, fewer inverted triangles, or a higher min q away from poles;
+ * HOC_LINEAR_GRADED_GROWTH). */
 hoc_status hoc_mesh_grade(hoc_model *model, const hoc_linear_options *options,
                           const int *algorithm, double budget, hoc_mesh **mesh);
 
