@@ -62,6 +62,8 @@ expect 1 "size factor zero" -- mesh "$model" --size-factor 0
 expect 1 "size and size factor" -- mesh "$model" --size 5 --size-factor 2
 expect 1 "size factor under size-min" -- mesh "$model" --size-factor 2 --size-min 100
 expect 1 "mesher timeout zero" -- mesh "$model" --mesher-timeout 0
+expect 1 "repair time zero" -- mesh "$model" --repair-time 0
+expect 1 "repair time not a number" -- optimize "$model" in.msh -o out.msh --repair-time nan
 expect 1 "refinements negative" -- mesh "$model" --refinements -1
 expect 1 "refinements too many" -- mesh "$model" --refinements 11
 expect 1 "optimize refinements too many" -- optimize "$model" in.msh -o out.msh --refinements 11

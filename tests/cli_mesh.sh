@@ -169,6 +169,12 @@ fi
   --json l6.json > /dev/null 2> l6err.txt
 code=$?
 ok "order 6: splits optimised locally, exit 5" "[ $code -eq 5 ] && grep -q 'red-green .* and optimising the new elements and two rings around them again' l6err.txt && grep -q '\"refinements\": 2,' l6.json"
+# --repair-time: with a nanosecond for the repairs, the same run splits
+# nothing and says why (rule 12)
+"$hocad" optimize "$model" t20_6.msh -o l6t.msh --max-iterations 1 --refinements 1 \
+  --repair-time 1e-9 --json l6t.json > /dev/null 2> l6terr.txt
+code=$?
+ok "--repair-time: no split past it, exit 5" "[ $code -eq 5 ] && ! grep -q 'splitting' l6terr.txt && grep -q 'the repairs took the 1e-09 s given them' l6terr.txt && grep -q '\"refinements\": 0,' l6t.json"
 # a remeshing lowers the minimum size ten times, unless that more than
 # quadruples the mesh: the bottle's curvature sizing at 8 elements per 2 pi
 # then makes over 20 000 elements from gmsh's 4 566, and the faces are

@@ -169,9 +169,8 @@ static const char *usage_mesh =
     "raise them to order P (new nodes in each face's parameters, or at the feet of\n"
     "the straight elements' points on the surface where that does better; on CAD\n"
     "curves, on the curves), untangle and smooth them, and report the quality\n"
-    "q = 1/eta of every stage (eta: the paper's Definition 2). Elements an\n"
-    "untangled result has below 0.9 x the linear mesh's min q are optimised once\n"
-    "more with two rings around them (a 'smoothed' stage).\n"
+    "q = 1/eta of every stage (eta: the paper's Definition 2). Repair rules:\n"
+    "docs/cli.md.\n"
     "\n"
     "options:\n"
     "  -p, --order P        element order, 1..15 (default 3)\n"
@@ -197,7 +196,9 @@ static const char *usage_mesh =
     "                       that leaves none tangled), else mesh their faces again\n"
     "                       with edges half as long (docs/cli.md) and start again,\n"
     "                       at most N times (default 2), then split, N times per\n"
-    "                       chain (with --linear only the splits, default 3)\n" OPTIMIZE_OPTIONS
+    "                       chain (with --linear only the splits, default 3)\n"
+    "  --repair-time S      seconds for those repairs (default: 4 x the time to the\n"
+    "                       first optimised mesh + 60 s), then the best is kept\n" OPTIMIZE_OPTIONS
     "  -o, --output F.msh   gmsh MSH 4.1 output (default: MODEL-NAME_pP.msh here;\n"
     "                       orders above 10 have no MSH type: use --vtu)\n" MSH_OPTIONS
     "  --vtu F.vtu          VTK Lagrange triangles with q per element\n"
@@ -236,7 +237,10 @@ static const char *usage_optimize =
     "  --refinements N      if elements stay tangled, split them in four (their\n"
     "                       neighbours in two to four) and optimise again, at most\n"
     "                       N times in each chain (default 6; 0 keeps the input's\n"
-    "                       elements)\n" MSH_OPTIONS
+    "                       elements)\n"
+    "  --repair-time S      seconds the splits may take (default: 4 x the time to\n"
+    "                       the first optimised mesh + 60 s); then the result with\n"
+    "                       the fewest tangled elements is kept\n" MSH_OPTIONS
     "  --vtu F.vtu          also a VTU with q per element\n"
     "  --json F.json        the report as JSON\n"
     "  --measure M          shape | oddy (default shape)\n" OPTIMIZE_OPTIONS
@@ -328,6 +332,8 @@ static int parse(int argc, char **argv, options *o, const char **pos, int max_po
       o->msh.parametric = 1;
     } else if (opt && VALUE("--refinements")) {
       if (!parsed(hoc_cli_parse_int("--refinements", v, 0, 10, &o->pipe.refinements))) return 0;
+    } else if (opt && VALUE("--repair-time")) {
+      if (!parsed(hoc_cli_parse_positive("--repair-time", v, &o->pipe.repair_time))) return 0;
     } else if (mesh && (VALUE("--order") || VALUE("-p"))) {
       if (!parsed(hoc_cli_parse_int("--order", v, 1, HOC_MAX_ORDER, &o->pipe.order))) return 0;
     } else if (mesh && VALUE("--size-min")) {

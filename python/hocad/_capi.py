@@ -200,6 +200,7 @@ class MeshOptions(Structure):
         ("event_user", c_void_p),
         ("mesher_timeout", c_double),
         ("grading", c_int),
+        ("repair_time", c_double),
     ]
 
 

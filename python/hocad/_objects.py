@@ -244,11 +244,12 @@ _MESH_OPTIONS = {
     "equispaced": ("equispaced", _flag),
     "keep_stages": ("keep_stages", _flag),
     "check_gradient": ("check_gradient", _flag),
+    "repair_time": ("repair_time", _real),
 }
 # what hoc_mesh_model and hoc_mesh_repair use (each ignores the others)
 _MODEL_OPTIONS = tuple(k for k in _MESH_OPTIONS if k != "keep_nodes")
 _REPAIR_OPTIONS = ("measure", "optimize", "fix_curves", "max_iterations", "refinements",
-                   "keep_nodes", "check_gradient")
+                   "keep_nodes", "check_gradient", "repair_time")
 
 
 def _mesh_options(options, allowed, callback):
@@ -409,6 +410,8 @@ class Model(_Handle):
             refinements (int, -1: default), equispaced (bool: convert the
             result to equispaced nodes), keep_stages (bool: the report's
             "linear_mesh" and "raised_mesh"), check_gradient (bool),
+            repair_time (seconds the repairs after the first optimisation
+            may take, 0: 4 x the time to it + 60 s, < 0: no bound),
             linear (a Mesh of this model whose corners are the linear mesh).
             progress: a callable taking an Event; returning True cancels.
 
@@ -671,7 +674,8 @@ class Mesh(_Handle):
         mesh is not changed.
 
         Keyword arguments: measure, optimize, fix_curves, max_iterations,
-        refinements, keep_nodes, check_gradient (as Model.mesh), progress.
+        refinements, keep_nodes, check_gradient, repair_time (as Model.mesh),
+        progress.
         """
         cb = _Callback(progress, _event)
         o = _mesh_options(options, _REPAIR_OPTIONS, cb)

@@ -105,6 +105,7 @@ int main(void) {
   FIELD(hoc_mesh_options, event_user);
   FIELD(hoc_mesh_options, mesher_timeout);
   FIELD(hoc_mesh_options, grading);
+  FIELD(hoc_mesh_options, repair_time);
   SIZE(hoc_report_files);
   FIELD(hoc_report_files, model);
   FIELD(hoc_report_files, mesh);

@@ -110,6 +110,17 @@ hoc_status hoc_mesh_optimize_full(hoc_mesh *mesh, const hoc_optimize_options *op
   return hoc_mesh_optimize_rules(mesh, options, &rules, result);
 }
 
+hoc_status hoc_mesh_optimize_until(hoc_mesh *mesh, const hoc_optimize_options *options, int full,
+                                   double deadline, hoc_optimize_result *result, int *timed_out) {
+  if (timed_out) *timed_out = 0;
+  hoc_opt_rules rules;
+  hoc_opt_rules_default(&rules);
+  if (full) rules.settled_sweeps = HOC_OPT_STAGNATION_SWEEPS;
+  rules.deadline = deadline;
+  rules.timed_out = timed_out;
+  return hoc_mesh_optimize_rules(mesh, options, &rules, result);
+}
+
 hoc_status hoc_mesh_optimize_rules(hoc_mesh *mesh, const hoc_optimize_options *options,
                                    const hoc_opt_rules *rules, hoc_optimize_result *result) {
   HOC_CHECK(mesh, HOC_ERR_ARGUMENT, "no mesh given");
@@ -131,7 +142,8 @@ hoc_status hoc_mesh_optimize_rules(hoc_mesh *mesh, const hoc_optimize_options *o
    * fewer. Not above HOC_OPT_PROTECT_MAX_ORDER (tunables.h), and not in a
    * local repair (free_elements): it runs the exact test from its first
    * sweep, as a protected run would, so that run would only repeat it. */
-  if (status == HOC_OK && a.tangled_final && !limited && may_protect) {
+  int late = rules && rules->deadline > 0 && hoc_now() > rules->deadline;
+  if (status == HOC_OK && a.tangled_final && !limited && may_protect && !late) {
     status = hoc_opt_snapshot_take(&first, mesh, a.tangled_final, a.objective_final);
     if (status == HOC_OK) status = hoc_opt_snapshot_restore(&start, mesh);
     if (status == HOC_OK) status =

@@ -14,4 +14,12 @@
 hoc_status hoc_mesh_optimize_full(hoc_mesh *mesh, const hoc_optimize_options *options,
                                   hoc_optimize_result *result);
 
+/* hoc_mesh_optimize (full: hoc_mesh_optimize_full) that stops at a time:
+ * once hoc_now() passes deadline (0: never), the sweeps stop as if they
+ * ran out and no later phase or run starts (no second attempt, exact
+ * phase, polish or protected run); the mesh is the best state reached.
+ * timed_out: NULL, or set to whether the deadline stopped it. */
+hoc_status hoc_mesh_optimize_until(hoc_mesh *mesh, const hoc_optimize_options *options, int full,
+                                   double deadline, hoc_optimize_result *result, int *timed_out);
+
 #endif

@@ -489,6 +489,8 @@ typedef struct hoc_opt_rules {
   int exact_relax_uv_min_order; /* HOC_OPT_EXACT_RELAX_UV_MIN_ORDER */
   size_t frame_pool_bytes;      /* HOC_OPT_FRAME_POOL_BYTES */
   int settled_sweeps;           /* HOC_OPT_SETTLED_SWEEPS (1..HOC_OPT_STAGNATION_SWEEPS) */
+  double deadline;              /* hoc_mesh_optimize_until (0: none) */
+  int *timed_out;               /* NULL, or set to 1 when the deadline stops a run */
 } hoc_opt_rules;
 void hoc_opt_rules_default(hoc_opt_rules *rules);
 /* hoc_opt_run with the given rules (NULL: the defaults). */

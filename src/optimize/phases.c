@@ -94,6 +94,7 @@ typedef struct run {
   int cut;                   /* this attempt was ended before its sweeps ran out */
   int smoothing;             /* the smoothing phase has begun */
   int second;                /* the sweeps are a second attempt's */
+  int late;                  /* the rules' deadline passed: the run ends */
   int settled;               /* the last phase that ended for lack of progress left none
                                 tangled (its smoothing converged) */
   /* free part of f and smallest q of the last sweeps, at [sweep % size] */
@@ -269,7 +270,11 @@ static hoc_status run_sweeps(run *r, int *used_up) {
   hoc_opt *o = &r->ctx;
   *used_up = 0;
   for (;;) {
-    if (r->it >= r->last) {
+    if (r->rules.deadline > 0 && hoc_now() > r->rules.deadline) {
+      r->late = 1;
+      if (r->rules.timed_out) *r->rules.timed_out = 1;
+    }
+    if (r->it >= r->last || r->late) {
       *used_up = 1;
       return HOC_OK;
     }
@@ -358,6 +363,12 @@ static hoc_status exact_phase(run *r, phase *next) {
  * or the best state if the last has more tangled, then the exact phase or
  * the polish. */
 static hoc_status end_sweeps(run *r, int used_up, phase *next) {
+  if (r->late) { /* past the deadline: the best state, nothing more */
+    *next = PHASE_DONE;
+    if (r->best.tangled != SIZE_MAX && r->tangled > r->best.tangled)
+      HOC_TRY(restore(r, &r->best));
+    return HOC_OK;
+  }
   if (used_up) {
     int started;
     HOC_TRY(second_attempt(r, &started));
@@ -411,6 +422,8 @@ void hoc_opt_rules_default(hoc_opt_rules *rules) {
   rules->exact_relax_uv_min_order = HOC_OPT_EXACT_RELAX_UV_MIN_ORDER;
   rules->frame_pool_bytes = HOC_OPT_FRAME_POOL_BYTES;
   rules->settled_sweeps = HOC_OPT_SETTLED_SWEEPS;
+  rules->deadline = 0;
+  rules->timed_out = NULL;
 }
 
 /* One run of the optimiser from the mesh as it is (see hoc_mesh_optimize);

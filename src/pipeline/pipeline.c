@@ -59,6 +59,31 @@ hoc_status hoc_run_stage(const hoc_run *run, hoc_stages *r, const char *name, co
              : HOC_OK;
 }
 
+void hoc_run_start_repairs(hoc_run *run, double first) {
+  if (run->deadline > 0 || run->o.repair_time < 0) return;
+  run->budget = run->o.repair_time > 0
+                    ? run->o.repair_time
+                    : HOC_PIPELINE_REPAIR_GROWTH * first + HOC_PIPELINE_REPAIR_SECONDS;
+  run->deadline = hoc_now() + run->budget;
+}
+
+int hoc_run_late(const hoc_run *run) { return run->deadline > 0 && hoc_now() >= run->deadline; }
+
+hoc_status hoc_run_note_late(const hoc_run *run) {
+  if (!hoc_run_late(run)) return HOC_OK;
+  if (run->o.repair_time > 0)
+    return hoc_run_event(run, HOC_EVENT_NOTE,
+                         "the repairs took the %g s given them (repair time): no further "
+                         "repair is made, and the attempt with the fewest tangled elements "
+                         "is kept",
+                         run->budget);
+  return hoc_run_event(run, HOC_EVENT_NOTE,
+                       "the repairs took the %.0f s given them (%d x the time to the first "
+                       "optimised mesh + %d s): no further repair is made, and the attempt "
+                       "with the fewest tangled elements is kept",
+                       run->budget, HOC_PIPELINE_REPAIR_GROWTH, HOC_PIPELINE_REPAIR_SECONDS);
+}
+
 /* Options ----------------------------------------------------------------- */
 
 void hoc_mesh_options_default(hoc_mesh_options *options) {
@@ -86,6 +111,8 @@ static hoc_status run_start(hoc_run *run, const hoc_mesh_options *options) {
             o->max_iterations);
   HOC_CHECK(o->refinements >= -1, HOC_ERR_ARGUMENT,
             "refinements %d out of range (-1 for the default, or 0 and above)", o->refinements);
+  HOC_CHECK(!isnan(o->repair_time), HOC_ERR_ARGUMENT, "repair_time is not a number");
+  run->deadline = run->budget = 0;
   return HOC_OK;
 }
 
@@ -378,9 +405,10 @@ done:
 
 /* The attempts of hoc_mesh_model: *final becomes the result (one of m's
  * meshes), *r its stages. */
-static hoc_status mesh_model_run(const hoc_run *run, hoc_model *model, model_meshes *m,
+static hoc_status mesh_model_run(hoc_run *run, hoc_model *model, model_meshes *m,
                                  hoc_stages *r, hoc_mesh **final) {
   const hoc_mesh_options *o = &run->o;
+  double t_start = hoc_now();
   hoc_mesh **attempt[3] = {&m->lin, &m->ho, &m->raised};
   hoc_mesh **kept[3] = {&m->kept_lin, &m->kept_ho, &m->kept_raised};
   hoc_stages kept_r = {0};
@@ -445,37 +473,41 @@ static hoc_status mesh_model_run(const hoc_run *run, hoc_model *model, model_mes
     if (!o->optimize || o->order < 2 || !hoc_stages_last(r)->stage.stats.tangled ||
         o->refinements < 1)
       break;
-    if (o->linear || r->remeshings >= o->refinements) {
-      size_t now_tangled = hoc_stages_last(r)->stage.stats.tangled;
-      if (m->kept_ho && hoc_stages_last(&kept_r)->stage.stats.tangled < now_tangled) {
-        int made = r->refinements, remade = r->remeshings;
-        HOC_TRY_GOTO(hoc_run_event(run, HOC_EVENT_NOTE,
-                                   "the last mesh has more tangled elements (%zu) than the one "
-                                   "after %d remeshing(s) (%zu): going on from that one",
-                                   now_tangled, kept_r.remeshings,
-                                   hoc_stages_last(&kept_r)->stage.stats.tangled),
-                     done);
-        move_meshes(attempt, kept);
-        *r = kept_r;
-        r->refinements = made;
-        r->remeshings = remade;
-      }
-      status = hoc_repair_refine_tangled(run, r, 2, &m->ho, NULL, 0);
-      *final = m->ho;
-      break;
-    }
+    hoc_run_start_repairs(run, hoc_now() - t_start);
     /* first the local repair, on a copy: splitting the tangled elements
      * (as below, once remeshing is spent) keeps the rest of the mesh; it
      * is kept if it leaves none tangled (the bottle at order 2: two
      * elements at its thread's end, which two remeshings only make worse).
      * From HOC_PIPELINE_REMESH_FIRST_FROM on, the remeshing comes first
      * unless the faces fold (see there) */
-    int split_done = 0, across_folds = 0;
-    HOC_TRY_GOTO(hoc_repair_tangled_on_folds(run, m->ho, &across_folds), done);
-    if (across_folds || o->order < HOC_PIPELINE_REMESH_FIRST_FROM) {
-      status = hoc_repair_split_first(run, r, &m->ho, across_folds, &split_done);
+    int split_done = 0, across_folds = 0, spent = o->linear || r->remeshings >= o->refinements;
+    if (!spent && !hoc_run_late(run)) {
+      HOC_TRY_GOTO(hoc_repair_tangled_on_folds(run, m->ho, &across_folds), done);
+      if (across_folds || o->order < HOC_PIPELINE_REMESH_FIRST_FROM) {
+        status = hoc_repair_split_first(run, r, &m->ho, across_folds, &split_done);
+        *final = m->ho;
+        if (status != HOC_OK || split_done) break;
+      }
+    }
+    if (spent || hoc_run_late(run)) {
+      size_t now_tangled = hoc_stages_last(r)->stage.stats.tangled;
+      if (m->kept_ho && hoc_stages_last(&kept_r)->stage.stats.tangled < now_tangled) {
+        int made = r->refinements, remade = r->remeshings;
+        HOC_TRY_GOTO(hoc_run_event(run, HOC_EVENT_NOTE,
+                                   "the last mesh has more tangled elements (%zu) than the one "
+                                   "after %d remeshing(s) (%zu): %s that one",
+                                   now_tangled, kept_r.remeshings,
+                                   hoc_stages_last(&kept_r)->stage.stats.tangled,
+                                   hoc_run_late(run) ? "keeping" : "going on from"),
+                     done);
+        move_meshes(attempt, kept);
+        *r = kept_r;
+        r->refinements = made;
+        r->remeshings = remade;
+      }
+      if (!hoc_run_late(run)) status = hoc_repair_refine_tangled(run, r, 2, &m->ho, NULL, 0);
       *final = m->ho;
-      if (status != HOC_OK || split_done) break;
+      break;
     }
     hoc_stages attempt_r = *r;
     HOC_TRY_GOTO(hoc_repair_refine_faces(run, r, model, m->lin, m->ho, &face_size), done);
@@ -499,6 +531,7 @@ static hoc_status mesh_model_run(const hoc_run *run, hoc_model *model, model_mes
       hoc_mesh_destroy(&m->lin);
     }
   }
+  if (status == HOC_OK) status = hoc_run_note_late(run);
   if (status == HOC_OK && *final == m->ho && o->optimize && o->order > 1) {
     status = hoc_repair_smooth_low(run, r, &m->ho);
     *final = m->ho;
@@ -592,8 +625,11 @@ hoc_status hoc_mesh_repair(const hoc_mesh *in, const hoc_mesh_options *options, 
   HOC_TRY_GOTO(hoc_run_stage(&run, &r, "input", cur, hoc_now() - t0, NULL, NULL), done);
   HOC_TRY_GOTO(hoc_repair_optimize_starts(&run, &r, &cur, run.o.refinements > 0 ? &start : NULL),
                done);
-  if (hoc_stages_last(&r)->stage.stats.tangled && run.o.refinements > 0)
+  if (hoc_stages_last(&r)->stage.stats.tangled && run.o.refinements > 0) {
+    hoc_run_start_repairs(&run, hoc_now() - t0);
     HOC_TRY_GOTO(hoc_repair_refine_tangled(&run, &r, 1, &cur, start, 0), done);
+    HOC_TRY_GOTO(hoc_run_note_late(&run), done);
+  }
   hoc_mesh_destroy(&start);
   HOC_TRY_GOTO(hoc_report_create("optimize", run.o.measure, &rep), done);
   HOC_TRY_GOTO(hoc_report_finish(rep, &r, cur, HOC_FIND_TANGLED, t0), done);

@@ -18,6 +18,20 @@
 #define HOC_PIPELINE_REMESHINGS 2
 #define HOC_PIPELINE_SPLITS_GIVEN_LINEAR 3
 #define HOC_PIPELINE_SPLITS_REPAIR 6
+/* The repairs' time when hoc_mesh_options.repair_time is 0: where
+ * elements stay tangled after the first optimisation, its remeshings,
+ * splits and their optimisations may take HOC_PIPELINE_REPAIR_GROWTH
+ * times the time to it plus HOC_PIPELINE_REPAIR_SECONDS; then the
+ * optimisation under way stops at its best state and the attempt with the
+ * fewest tangled elements is kept. A tangled element no finer mesh opens
+ * (at a CAD cusp a curved corner keeps its zero angle at every size) sends
+ * the chain through remeshings that multiply the mesh and splits, each
+ * followed by a high-order optimisation: bench/pinch_models.py's
+ * crescent_plate at order 10 (824 elements, 100 s to the first optimised
+ * mesh) did not end in 25 minutes. The growth is the remeshing's
+ * (HOC_PIPELINE_REMESH_GROWTH): one remeshing may quadruple the mesh. */
+#define HOC_PIPELINE_REPAIR_GROWTH HOC_PIPELINE_REMESH_GROWTH
+#define HOC_PIPELINE_REPAIR_SECONDS 60
 /* A remeshing bounds the edges on the faces of tangled elements by this
  * fraction of their longest edge, and lowers the minimum size this many
  * times (features below the default minimum size, e.g. the end of a
@@ -135,10 +149,23 @@ struct hoc_report {
   hoc_mesh *linear, *raised; /* keep_stages: owned */
 };
 
-/* A running pipeline: its options, with the defaults resolved. */
+/* A running pipeline: its options, with the defaults resolved, and the
+ * time its repairs end (hoc_now(); 0: not started or no bound). */
 typedef struct hoc_run {
   hoc_mesh_options o;
+  double deadline;
+  double budget; /* the seconds the repairs were given */
 } hoc_run;
+
+/* The repairs' time starts now, `first` seconds after the run's start
+ * (hoc_mesh_options.repair_time; once per run). */
+void hoc_run_start_repairs(hoc_run *run, double first);
+
+/* 1 if the repairs' time is over. */
+int hoc_run_late(const hoc_run *run);
+
+/* A note that the repairs' time is over, if it is. */
+hoc_status hoc_run_note_late(const hoc_run *run);
 
 /** The source mesh raised to `order` with the run's node set: straight in
  *  (u, v), or at the feet on the faces where that does better

@@ -25,7 +25,8 @@ static int iteration_event(void *user, const hoc_optimize_iteration *it) {
   return run->o.event(run->o.event_user, &ev);
 }
 
-/* hoc_repair_optimize; full: hoc_mesh_optimize_full. */
+/* hoc_repair_optimize; full: hoc_mesh_optimize_full; either stops at the
+ * repairs' deadline. */
 static hoc_status optimize_stage(const hoc_run *run, hoc_stages *r, const char *name, hoc_mesh *mesh,
                                  const unsigned char *free, int full) {
   const hoc_mesh_options *o = &run->o;
@@ -53,7 +54,7 @@ static hoc_status optimize_stage(const hoc_run *run, hoc_stages *r, const char *
                         hoc_mesh_num_elements(mesh)));
   hoc_optimize_result res;
   double t0 = hoc_now();
-  HOC_TRY(full ? hoc_mesh_optimize_full(mesh, &oo, &res) : hoc_mesh_optimize(mesh, &oo, &res));
+  HOC_TRY(hoc_mesh_optimize_until(mesh, &oo, full, run->deadline, &res, NULL));
   if (res.diagnostics.polished)
     HOC_TRY(hoc_run_event(run, HOC_EVENT_NOTE,
                           "the final polish untangled %zu element(s) the sweeps left",
@@ -186,9 +187,10 @@ hoc_status hoc_repair_refine_tangled(const hoc_run *run, hoc_stages *r, int n_ke
   hoc_mesh *own_start = NULL; /* the longest-edge chain's latest split mesh, unoptimised */
   hoc_stages best_r = *r, chain_r[2] = {*r, *r};
   hoc_status status = HOC_OK;
-  int made = r->refinements, levels = run->o.refinements;
+  int made = r->refinements, made_before = made, levels = run->o.refinements;
   for (int level = 0; level < levels && status == HOC_OK; ++level)
-    for (int k = 0; k < 2 && status == HOC_OK && hoc_stages_last(&best_r)->stage.stats.tangled;
+    for (int k = 0; k < 2 && status == HOC_OK && hoc_stages_last(&best_r)->stage.stats.tangled &&
+                    !hoc_run_late(run);
          ++k) {
       hoc_mesh *fine = NULL, *fine_start = NULL;
       int from_start = k == 1 && start;
@@ -229,7 +231,7 @@ hoc_status hoc_repair_refine_tangled(const hoc_run *run, hoc_stages *r, int n_ke
                            "kept the mesh of refinement %d of %d, which has the fewest tangled "
                            "elements",
                            best_r.refinements, made);
-  else if (status == HOC_OK && !trial)
+  else if (status == HOC_OK && !trial && made > made_before)
     status = hoc_run_event(run, HOC_EVENT_NOTE,
                            "splitting left no fewer tangled elements: kept the mesh before it");
   return status;
@@ -288,7 +290,7 @@ hoc_status hoc_repair_split_first(const hoc_run *run, hoc_stages *r, hoc_mesh **
   }
   hoc_mesh_destroy(&copy);
   r->refinements = trial.refinements; /* made, though not kept */
-  if (status == HOC_OK)
+  if (status == HOC_OK && !hoc_run_late(run))
     status =
         hoc_run_event(run, HOC_EVENT_NOTE,
                       "splitting left %zu tangled at best: meshing the faces again instead", left);
