@@ -607,6 +607,106 @@ hoc_status hoc_mesh_elevate_feet_from(const hoc_mesh *in, const hoc_mesh *straig
   return reinterpolate(in, straight->order, straight->nodeset, face_foot, straight, out);
 }
 
+/* The displacements in (u, v) of element e's edges on CAD curves, d[k][j]
+ * at its p + 1 points (0 at the corners): the edge's nodes of `out`
+ * against the points of the source map (src: [np][2], the source
+ * element's (u, v) map at out's nodes, in out's unwrapping). *curved: a
+ * bit per edge on a curve. */
+static void edge_displacements(const hoc_mesh *out, size_t e, const double *src, double *d,
+                               int *curved) {
+  int p = out->order, np = out->np;
+  const double *euv = out->elem_uv + 2 * e * (size_t)np;
+  *curved = 0;
+  for (int k = 0; k < 3; ++k) {
+    double *dk = d + 2 * (size_t)k * (size_t)(p + 1);
+    size_t first = out->conn[e * (size_t)np + 3 + (size_t)k * (size_t)(p - 1)];
+    memset(dk, 0, 2 * (size_t)(p + 1) * sizeof *dk);
+    if (out->dim[first] != HOC_ON_CURVE) continue;
+    *curved |= 1 << k;
+    for (int j = 1; j < p; ++j) {
+      int at = 3 + k * (p - 1) + j - 1;
+      for (int c = 0; c < 2; ++c) dk[2 * j + c] = euv[2 * at + c] - src[2 * at + c];
+    }
+  }
+}
+
+hoc_status hoc_mesh_blend_interior(const hoc_mesh *in, hoc_mesh *out, const unsigned char *which) {
+  HOC_CHECK(in && out && which, HOC_ERR_ARGUMENT, "no mesh or no elements given");
+  HOC_CHECK(in->model == out->model && in->n_elems == out->n_elems, HOC_ERR_MISMATCH,
+            "the raise is not of this source");
+  int p = out->order, np = out->np, npi = in->np;
+  size_t ne = out->n_elems;
+  if (p < 3) return HOC_OK; /* no interior node */
+  double *rs = NULL, *s = NULL, *rs_in = NULL, *N = NULL, *src = NULL, *d = NULL, *L = NULL;
+  unsigned char *moved = NULL;
+  hoc_lagrange *basis = NULL;
+  hoc_status status = HOC_OK;
+  HOC_ALLOC_GOTO(rs, 2 * (size_t)np, done);
+  HOC_ALLOC_GOTO(s, (size_t)p + 1, done);
+  HOC_ALLOC_GOTO(rs_in, 2 * (size_t)npi, done);
+  HOC_ALLOC_GOTO(N, (size_t)np * (size_t)npi, done);
+  HOC_ALLOC_GOTO(src, 2 * (size_t)np, done);
+  HOC_ALLOC_GOTO(d, 6 * ((size_t)p + 1), done);
+  HOC_ALLOC_GOTO(L, (size_t)p + 1, done);
+  HOC_ALLOC_GOTO(moved, out->n_nodes + 1, done);
+  HOC_TRY_GOTO(hoc_tri_nodes(p, out->nodeset, rs), done);
+  HOC_TRY_GOTO(hoc_edge_nodes(p, out->nodeset, s), done);
+  HOC_TRY_GOTO(hoc_tri_nodes(in->order, in->nodeset, rs_in), done);
+  HOC_TRY_GOTO(hoc_lagrange_create(in->order, rs_in, &basis), done);
+  HOC_TRY_GOTO(hoc_lagrange_eval(basis, np, rs, N, NULL), done); /* [np][npi] */
+  for (size_t e = 0; e < ne; ++e) {
+    if (!which[e]) continue;
+    const size_t *sl = out->elem_slot + e * (size_t)np;
+    int pole = 0;
+    for (int i = 0; i < np; ++i) pole |= out->slot_pole[sl[i]];
+    for (int i = 0; i < npi; ++i) pole |= in->slot_pole[in->elem_slot[e * (size_t)npi + (size_t)i]];
+    if (pole) continue; /* an arbitrary coordinate: the source map is not the nodes' */
+    const double *ein = in->elem_uv + 2 * e * (size_t)npi;
+    const double *eout = out->elem_uv + 2 * e * (size_t)np;
+    /* the two unwrappings differ by whole periods, as at corner 0 */
+    double shift[2] = {eout[0] - ein[0], eout[1] - ein[1]};
+    for (int k = 0; k < np; ++k)
+      for (int c = 0; c < 2; ++c) {
+        double v = shift[c];
+        for (int i = 0; i < npi; ++i) v += N[(size_t)k * (size_t)npi + (size_t)i] * ein[2 * i + c];
+        src[2 * k + c] = v;
+      }
+    int curved;
+    edge_displacements(out, e, src, d, &curved);
+    if (!curved) continue;
+    const hoc_cad_face *face = &out->model->faces[out->elem_face[e]];
+    for (int k = 3 * p; k < np; ++k) {
+      double lam[3] = {1 - rs[2 * k] - rs[2 * k + 1], rs[2 * k], rs[2 * k + 1]}, uv[2];
+      for (int c = 0; c < 2; ++c) uv[c] = src[2 * k + c];
+      for (int j = 0; j < 3; ++j) {
+        double a = lam[j], b = lam[(j + 1) % 3], w = a + b;
+        if (!(curved & (1 << j)) || !(w > 0)) continue;
+        hoc_lagrange_1d(p, s, b / w, L, NULL);
+        const double *dj = d + 2 * (size_t)j * (size_t)(p + 1);
+        for (int m = 1; m < p; ++m)
+          for (int c = 0; c < 2; ++c) uv[c] += w * L[m] * dj[2 * m + c];
+      }
+      hoc_cad_face_wrap(face, uv);
+      size_t node = out->conn[e * (size_t)np + (size_t)k];
+      memcpy(out->param + 2 * node, uv, sizeof uv);
+      moved[node] = 1;
+    }
+  }
+  int at_pole = 0;
+  status = hoc_mesh_move_nodes(out, moved, &at_pole);
+done:
+  hoc_lagrange_destroy(&basis);
+  free(rs);
+  free(s);
+  free(rs_in);
+  free(N);
+  free(src);
+  free(d);
+  free(L);
+  free(moved);
+  return status;
+}
+
 hoc_status hoc_mesh_convert(const hoc_mesh *in, hoc_nodeset set, hoc_mesh **out) {
   return hoc_mesh_convert_nodeset(in, set, out);
 }

@@ -215,6 +215,17 @@ hoc_status hoc_mesh_elevate_feet_from(const hoc_mesh *in, const hoc_mesh *straig
  *  the one a third raise would make, for a copy of nodes; face_gap is the
  *  larger of the two. */
 hoc_status hoc_mesh_take_feet(hoc_mesh *m, const hoc_mesh *feet, const unsigned char *take);
+/** Where out (a raise of in, order >= 3: the same elements) has edges on
+ *  CAD curves, the interior nodes of the elements flagged in
+ *  which[n_elems] follow them: each such edge's displacement in (u, v)
+ *  from the source element's map (its nodes on the curve against the
+ *  map's points there, d_k(s), 0 at the corners) is added to the map at
+ *  each interior node, with barycentrics l, as
+ *  (l_k + l_{k+1}) d_k(l_{k+1} / (l_k + l_{k+1})): the linear blending of
+ *  the edges into the triangle. Nodes on edges stay; the interior nodes of
+ *  elements without such an edge are placed on the map. Elements with a
+ *  node at a pole are left: their map is not in both parameters. */
+hoc_status hoc_mesh_blend_interior(const hoc_mesh *in, hoc_mesh *out, const unsigned char *which);
 /** The curves whose nodes hoc_mesh_elevate_feet places at the feet with
  *  face_foot = faces: those along the faces' elements, flagged in
  *  curves[n_curves] (set to 1, others left); m of order >= 2. */

@@ -260,6 +260,49 @@ static hoc_status raise_quality(const hoc_run *run, const hoc_mesh *m,
   return status;
 }
 
+/* The interior nodes of out's elements with an edge on a CAD curve (out:
+ * a raise of in; none on the faces flagged in skip, which may be NULL)
+ * blended with those edges (hoc_mesh_blend_interior), element by element
+ * where that makes the element valid or raises its q; qs: the elements'
+ * q, updated. */
+static hoc_status blend_interior(const hoc_run *run, const hoc_mesh *in, hoc_mesh *out,
+                                 const unsigned char *skip, double *qs) {
+  size_t ne = hoc_mesh_num_elements(out), np = (size_t)out->np, n_flag = 0, n_keep = 0;
+  int p = out->order;
+  unsigned char *flag = hoc_calloc(ne + 1, 1), *keep = hoc_calloc(ne + 1, 1);
+  double *qb = hoc_calloc(ne + 1, sizeof *qb);
+  hoc_mesh *copy = NULL;
+  hoc_status status = HOC_OK;
+  if (!flag || !keep || !qb) {
+    status = HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
+    goto done;
+  }
+  for (size_t e = 0; e < ne; ++e) {
+    if (skip && skip[out->elem_face[e]]) continue;
+    for (size_t k = 3; k < 3 * (size_t)p && !flag[e]; ++k)
+      flag[e] = out->dim[out->conn[e * np + k]] == HOC_ON_CURVE;
+    n_flag += flag[e];
+  }
+  if (!n_flag) goto done;
+  HOC_TRY_GOTO(hoc_mesh_copy(out, &copy), done);
+  HOC_TRY_GOTO(hoc_mesh_blend_interior(in, copy, flag), done);
+  HOC_TRY_GOTO(hoc_mesh_measure_some(copy, run->o.measure, flag, qb), done);
+  for (size_t e = 0; e < ne; ++e) {
+    keep[e] = flag[e] && (qs[e] > 0 ? qb[e] > qs[e] : qb[e] > 0);
+    n_keep += keep[e];
+  }
+  if (!n_keep) goto done;
+  HOC_TRY_GOTO(hoc_mesh_blend_interior(in, out, keep), done);
+  for (size_t e = 0; e < ne; ++e)
+    if (keep[e]) qs[e] = qb[e];
+done:
+  hoc_mesh_destroy(&copy);
+  free(flag);
+  free(keep);
+  free(qb);
+  return status;
+}
+
 hoc_status hoc_pipeline_raise(const hoc_run *run, const hoc_mesh *in, int order, hoc_mesh **out,
                               double *q) {
   hoc_nodeset set = run->o.nodeset;
@@ -281,6 +324,9 @@ hoc_status hoc_pipeline_raise(const hoc_run *run, const hoc_mesh *in, int order,
   qf = qs + ne;
   HOC_TRY_GOTO(hoc_mesh_measure(*out, measure, qs, NULL, NULL), done);
   if (order < 2) goto done;
+  /* interior nodes that follow the edges on curves, where that helps;
+   * the feet are compared with that */
+  if (order >= 3) HOC_TRY_GOTO(blend_interior(run, in, *out, NULL, qs), done);
   /* the feet are tried on the faces whose straight elements tangle or
    * lose q against the source's (HOC_PIPELINE_FOOT_GAIN) */
   HOC_TRY_GOTO(hoc_mesh_measure(in, measure, qf, NULL, NULL), done);
@@ -314,6 +360,9 @@ hoc_status hoc_pipeline_raise(const hoc_run *run, const hoc_mesh *in, int order,
     HOC_TRY_GOTO(hoc_mesh_take_feet(*out, feet, take), done);
   }
   HOC_TRY_GOTO(raise_quality(run, *out, take, qf, qs), done);
+  /* the other faces' elements along curves whose nodes went to the feet:
+   * blended again with their edges there */
+  if (order >= 3) HOC_TRY_GOTO(blend_interior(run, in, *out, take, qs), done);
 done:
   if (status == HOC_OK && q) memcpy(q, qs, ne * sizeof *q);
   if (status != HOC_OK) hoc_mesh_destroy(out);
