@@ -70,7 +70,7 @@ static void test_kinked_plane(int p) {
   /* columns of width 0.2 in u: the knot at u = 0.5 runs through the middle one */
   CHECK_OK(hoc_mesh_grid_linear(m, 5, 4, &lin));
   if (!lin) goto done;
-  hoc_run run;
+  hoc_run run = {0};
   hoc_mesh_options_default(&run.o);
   CHECK_OK(hoc_mesh_elevate(lin, p, HOC_NODES_EQUISPACED, &straight));
   size_t ne = hoc_mesh_num_elements(lin);
@@ -185,7 +185,7 @@ static void test_take_feet_is_a_raise(void) {
   if (other) CHECK_STATUS(hoc_mesh_take_feet(other, feet, take), HOC_ERR_MISMATCH);
   hoc_mesh_destroy(&other);
   /* the raise's q, known from its placements, are those measured anew */
-  hoc_run run;
+  hoc_run run = {0};
   hoc_mesh_options_default(&run.o);
   for (int p = 2; p <= 8; p += 3) {
     hoc_mesh *raised = NULL;
@@ -254,7 +254,7 @@ static void test_never_worse(void) {
   if (!m) return;
   hoc_mesh *lin = NULL, *straight = NULL, *feet = NULL, *raised = NULL;
   CHECK_OK(hoc_mesh_grid_linear(m, 6, 4, &lin));
-  hoc_run run;
+  hoc_run run = {0};
   hoc_mesh_options_default(&run.o);
   unsigned char all = 1;
   CHECK_OK(hoc_mesh_elevate(lin, 8, HOC_NODES_EQUISPACED, &straight));

@@ -181,7 +181,7 @@ static void test_folded_face(void) {
  * across the fold, tangled, all on the folded face; a plain square has
  * none. */
 static void test_tangled_on_folds(void) {
-  hoc_run run;
+  hoc_run run = {0};
   hoc_mesh_options_default(&run.o);
   const hoc_analytic_kind kinds[2] = {HOC_ANALYTIC_FOLD, HOC_ANALYTIC_PLANE};
   for (int k = 0; k < 2; ++k) {

@@ -239,8 +239,8 @@ static const char *usage_optimize =
     "                       N times in each chain (default 6; 0 keeps the input's\n"
     "                       elements)\n"
     "  --repair-time S      seconds the splits may take (default: 4 x the time to\n"
-    "                       the first optimised mesh + 60 s); then the result with\n"
-    "                       the fewest tangled elements is kept\n" MSH_OPTIONS
+    "                       the first optimised mesh + 60 s; none: no limit); then\n"
+    "                       the result with the fewest tangled elements is kept\n" MSH_OPTIONS
     "  --vtu F.vtu          also a VTU with q per element\n"
     "  --json F.json        the report as JSON\n"
     "  --measure M          shape | oddy (default shape)\n" OPTIMIZE_OPTIONS
@@ -333,7 +333,10 @@ static int parse(int argc, char **argv, options *o, const char **pos, int max_po
     } else if (opt && VALUE("--refinements")) {
       if (!parsed(hoc_cli_parse_int("--refinements", v, 0, 10, &o->pipe.refinements))) return 0;
     } else if (opt && VALUE("--repair-time")) {
-      if (!parsed(hoc_cli_parse_positive("--repair-time", v, &o->pipe.repair_time))) return 0;
+      if (!strcmp(v, "none"))
+        o->pipe.repair_time = -1;
+      else if (!parsed(hoc_cli_parse_positive("--repair-time", v, &o->pipe.repair_time)))
+        return 0;
     } else if (mesh && (VALUE("--order") || VALUE("-p"))) {
       if (!parsed(hoc_cli_parse_int("--order", v, 1, HOC_MAX_ORDER, &o->pipe.order))) return 0;
     } else if (mesh && VALUE("--size-min")) {

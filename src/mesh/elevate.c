@@ -638,6 +638,7 @@ hoc_status hoc_mesh_blend_interior(const hoc_mesh *in, hoc_mesh *out, const unsi
   size_t ne = out->n_elems;
   if (p < 3) return HOC_OK; /* no interior node */
   double *rs = NULL, *s = NULL, *rs_in = NULL, *N = NULL, *src = NULL, *d = NULL, *L = NULL;
+  double *before = NULL;
   unsigned char *moved = NULL;
   hoc_lagrange *basis = NULL;
   hoc_status status = HOC_OK;
@@ -649,6 +650,8 @@ hoc_status hoc_mesh_blend_interior(const hoc_mesh *in, hoc_mesh *out, const unsi
   HOC_ALLOC_GOTO(d, 6 * ((size_t)p + 1), done);
   HOC_ALLOC_GOTO(L, (size_t)p + 1, done);
   HOC_ALLOC_GOTO(moved, out->n_nodes + 1, done);
+  HOC_ALLOC_GOTO(before, 2 * out->n_nodes + 1, done);
+  memcpy(before, out->param, 2 * out->n_nodes * sizeof *before);
   HOC_TRY_GOTO(hoc_tri_nodes(p, out->nodeset, rs), done);
   HOC_TRY_GOTO(hoc_edge_nodes(p, out->nodeset, s), done);
   HOC_TRY_GOTO(hoc_tri_nodes(in->order, in->nodeset, rs_in), done);
@@ -693,8 +696,13 @@ hoc_status hoc_mesh_blend_interior(const hoc_mesh *in, hoc_mesh *out, const unsi
     }
   }
   int at_pole = 0;
-  status = hoc_mesh_move_nodes(out, moved, &at_pole);
+  HOC_TRY_GOTO(hoc_mesh_move_nodes(out, moved, &at_pole), done);
+  if (at_pole) { /* a node on a pole side: the mesh as it was (see hoc_mesh_move_nodes) */
+    memcpy(out->param, before, 2 * out->n_nodes * sizeof *before);
+    status = hoc_mesh_move_nodes(out, moved, &at_pole);
+  }
 done:
+  free(before);
   hoc_lagrange_destroy(&basis);
   free(rs);
   free(s);

@@ -222,9 +222,10 @@ hoc_status hoc_mesh_take_feet(hoc_mesh *m, const hoc_mesh *feet, const unsigned 
  *  map's points there, d_k(s), 0 at the corners) is added to the map at
  *  each interior node, with barycentrics l, as
  *  (l_k + l_{k+1}) d_k(l_{k+1} / (l_k + l_{k+1})): the linear blending of
- *  the edges into the triangle. Nodes on edges stay; the interior nodes of
- *  elements without such an edge are placed on the map. Elements with a
- *  node at a pole are left: their map is not in both parameters. */
+ *  the edges into the triangle. Nodes on edges stay, as do elements
+ *  without such an edge and those with a node at a pole (their map is not
+ *  in both parameters); if a moved node lands on a pole side, nothing
+ *  moves. */
 hoc_status hoc_mesh_blend_interior(const hoc_mesh *in, hoc_mesh *out, const unsigned char *which);
 /** The curves whose nodes hoc_mesh_elevate_feet places at the feet with
  *  face_foot = faces: those along the faces' elements, flagged in

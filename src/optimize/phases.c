@@ -363,11 +363,12 @@ static hoc_status exact_phase(run *r, phase *next) {
  * or the best state if the last has more tangled, then the exact phase or
  * the polish. */
 static hoc_status end_sweeps(run *r, int used_up, phase *next) {
-  if (r->late) { /* past the deadline: the best state, nothing more */
+  if (r->late) { /* past the deadline: the best state, counted exactly, nothing more */
     *next = PHASE_DONE;
     if (r->best.tangled != SIZE_MAX && r->tangled > r->best.tangled)
       HOC_TRY(restore(r, &r->best));
-    return HOC_OK;
+    r->ctx.cfg.exact = 1;
+    return restart_state(r);
   }
   if (used_up) {
     int started;

@@ -67,10 +67,14 @@ void hoc_run_start_repairs(hoc_run *run, double first) {
   run->deadline = hoc_now() + run->budget;
 }
 
-int hoc_run_late(const hoc_run *run) { return run->deadline > 0 && hoc_now() >= run->deadline; }
+int hoc_run_late(const hoc_run *run) {
+  int late = run->deadline > 0 && hoc_now() >= run->deadline;
+  if (late && run->cut) *run->cut = 1;
+  return late;
+}
 
 hoc_status hoc_run_note_late(const hoc_run *run) {
-  if (!hoc_run_late(run)) return HOC_OK;
+  if (!run->cut || !*run->cut) return HOC_OK;
   if (run->o.repair_time > 0)
     return hoc_run_event(run, HOC_EVENT_NOTE,
                          "the repairs took the %g s given them (repair time): no further "
@@ -113,6 +117,7 @@ static hoc_status run_start(hoc_run *run, const hoc_mesh_options *options) {
             "refinements %d out of range (-1 for the default, or 0 and above)", o->refinements);
   HOC_CHECK(!isnan(o->repair_time), HOC_ERR_ARGUMENT, "repair_time is not a number");
   run->deadline = run->budget = 0;
+  run->cut = NULL;
   return HOC_OK;
 }
 
@@ -264,7 +269,8 @@ static hoc_status raise_quality(const hoc_run *run, const hoc_mesh *m,
  * a raise of in; none on the faces flagged in skip, which may be NULL)
  * blended with those edges (hoc_mesh_blend_interior), element by element
  * where that makes the element valid or raises its q; qs: the elements'
- * q, updated. */
+ * q, updated (with skip: measured again first, the mesh may be the feet's
+ * rebuilt one). */
 static hoc_status blend_interior(const hoc_run *run, const hoc_mesh *in, hoc_mesh *out,
                                  const unsigned char *skip, double *qs) {
   size_t ne = hoc_mesh_num_elements(out), np = (size_t)out->np, n_flag = 0, n_keep = 0;
@@ -284,6 +290,7 @@ static hoc_status blend_interior(const hoc_run *run, const hoc_mesh *in, hoc_mes
     n_flag += flag[e];
   }
   if (!n_flag) goto done;
+  if (skip) HOC_TRY_GOTO(hoc_mesh_measure_some(out, run->o.measure, flag, qs), done);
   HOC_TRY_GOTO(hoc_mesh_copy(out, &copy), done);
   HOC_TRY_GOTO(hoc_mesh_blend_interior(in, copy, flag), done);
   HOC_TRY_GOTO(hoc_mesh_measure_some(copy, run->o.measure, flag, qb), done);
@@ -606,7 +613,9 @@ hoc_status hoc_mesh_model(hoc_model *model, const hoc_mesh_options *options, hoc
   HOC_CHECK(model, HOC_ERR_ARGUMENT, "no model given");
   hoc_run run;
   double t0 = hoc_now();
+  int cut = 0;
   HOC_TRY(run_start(&run, options));
+  run.cut = &cut;
   HOC_TRY(check_model_options(model, &run.o));
   if (run.o.refinements < 0)
     run.o.refinements = run.o.linear ? HOC_PIPELINE_SPLITS_GIVEN_LINEAR : HOC_PIPELINE_REMESHINGS;
@@ -663,7 +672,9 @@ hoc_status hoc_mesh_repair(const hoc_mesh *in, const hoc_mesh_options *options, 
   if (report) *report = NULL;
   HOC_CHECK(in, HOC_ERR_ARGUMENT, "no mesh given");
   hoc_run run;
+  int cut = 0;
   HOC_TRY(run_start(&run, options));
+  run.cut = &cut;
   if (run.o.refinements < 0) run.o.refinements = HOC_PIPELINE_SPLITS_REPAIR;
   hoc_mesh *cur = NULL, *start = NULL;
   hoc_report *rep = NULL;

@@ -27,9 +27,10 @@
  * (at a CAD cusp a curved corner keeps its zero angle at every size) sends
  * the chain through remeshings that multiply the mesh and splits, each
  * followed by a high-order optimisation: bench/pinch_models.py's
- * crescent_plate at order 10 (824 elements, 100 s to the first optimised
- * mesh) did not end in 25 minutes. The growth is the remeshing's
- * (HOC_PIPELINE_REMESH_GROWTH): one remeshing may quadruple the mesh. */
+ * crescent_plate at order 10 keeps 5 to 7 elements tangled at its cusps
+ * through both remeshings (824 elements to 11 586) and the splits after
+ * them. The growth is the remeshing's (HOC_PIPELINE_REMESH_GROWTH): one
+ * remeshing may quadruple the mesh. */
 #define HOC_PIPELINE_REPAIR_GROWTH HOC_PIPELINE_REMESH_GROWTH
 #define HOC_PIPELINE_REPAIR_SECONDS 60
 /* A remeshing bounds the edges on the faces of tangled elements by this
@@ -62,7 +63,17 @@
  * direct raise is used. */
 #define HOC_PIPELINE_COARSE_FROM 6
 /* Every raise (hoc_pipeline_raise) places the new nodes straight in each
- * face's (u, v); on the faces where that tangles elements or lowers the
+ * face's (u, v). From order 3 the interior nodes of each element with an
+ * edge on a CAD curve then follow that edge: its displacement from the
+ * source element's (u, v) map is blended into the element
+ * (hoc_mesh_blend_interior), kept per element where that makes the element
+ * valid or raises its q; again after the feet, on the elements along the
+ * curves whose nodes went to them. An element along a curve that bends
+ * more than the element is wide has its edge nodes on the curve and its
+ * interior nodes, straight in (u, v), beyond that edge: it folds
+ * (gear_f360 raised to order 5: 115 elements folded straight, 5 blended;
+ * at order 10 146 and 5; test: tests/test_mesh_blend.c). Then, on the
+ * faces where the raise tangles elements or lowers the
  * face's min q by more than this share against the source, a second time
  * at the feet of the source elements' points (hoc_mesh_elevate_feet_from),
  * and such a face takes the feet where they tangle fewer of its elements,
@@ -75,16 +86,6 @@
  * (fuselage_occ28366: a knot at u = 2 where |phi_u| halves, every element
  * across it folded at order 10). */
 #define HOC_PIPELINE_FOOT_GAIN 0.01
-/* Before the feet are tried (from order 3, and again after, on the
- * elements along the curves whose nodes went to the feet), the interior
- * nodes of each element with an edge on a CAD curve follow that edge:
- * its displacement from the source element's (u, v) map is blended into
- * the element (hoc_mesh_blend_interior), kept per element where that
- * makes the element valid or raises its q. An element along a curve that
- * bends more than the element is wide has its edge nodes on the curve and
- * its interior nodes, straight in (u, v), beyond that edge: it folds.
- * gear_f360 raised to order 5: 115 elements folded straight, 5 blended; at
- * order 10 146 and 5. Test: tests/test_mesh_blend.c. */
 #define HOC_PIPELINE_COARSE_ORDER 3
 /* From this order on, tangled elements left on faces that do not fold
  * have their faces meshed again before any split (hocad mesh, rule 4).
@@ -167,16 +168,18 @@ typedef struct hoc_run {
   hoc_mesh_options o;
   double deadline;
   double budget; /* the seconds the repairs were given */
+  int *cut;      /* NULL, or set to 1 once the limit skipped or stopped a repair */
 } hoc_run;
 
 /* The repairs' time starts now, `first` seconds after the run's start
  * (hoc_mesh_options.repair_time; once per run). */
 void hoc_run_start_repairs(hoc_run *run, double first);
 
-/* 1 if the repairs' time is over. */
+/* 1 if the repairs' time is over; the caller then skips a repair (and
+ * the run records that the limit cut it). */
 int hoc_run_late(const hoc_run *run);
 
-/* A note that the repairs' time is over, if it is. */
+/* A note that the repairs' time cut a repair, if it did. */
 hoc_status hoc_run_note_late(const hoc_run *run);
 
 /** The source mesh raised to `order` with the run's node set: straight in

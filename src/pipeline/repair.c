@@ -54,7 +54,9 @@ static hoc_status optimize_stage(const hoc_run *run, hoc_stages *r, const char *
                         hoc_mesh_num_elements(mesh)));
   hoc_optimize_result res;
   double t0 = hoc_now();
-  HOC_TRY(hoc_mesh_optimize_until(mesh, &oo, full, run->deadline, &res, NULL));
+  int timed_out = 0;
+  HOC_TRY(hoc_mesh_optimize_until(mesh, &oo, full, run->deadline, &res, &timed_out));
+  if (timed_out && run->cut) *run->cut = 1;
   if (res.diagnostics.polished)
     HOC_TRY(hoc_run_event(run, HOC_EVENT_NOTE,
                           "the final polish untangled %zu element(s) the sweeps left",
@@ -288,6 +290,13 @@ hoc_status hoc_repair_split_first(const hoc_run *run, hoc_stages *r, hoc_mesh **
                          "kept the mesh of refinement %d, which has no tangled element",
                          trial.refinements);
   }
+  if (status == HOC_OK && left < hoc_stages_last(r)->stage.stats.tangled && hoc_run_late(run)) {
+    /* no remeshing follows: the fewer tangled are kept */
+    hoc_mesh_destroy(ho);
+    *ho = copy;
+    *r = trial;
+    return HOC_OK;
+  }
   hoc_mesh_destroy(&copy);
   r->refinements = trial.refinements; /* made, though not kept */
   if (status == HOC_OK && !hoc_run_late(run))
@@ -354,7 +363,9 @@ hoc_status hoc_repair_smooth_low(const hoc_run *run, hoc_stages *r, hoc_mesh **m
                              "optimising them and two rings around them once more",
                              n_low, r->s[0].stage.stats.min),
                done);
-  HOC_TRY_GOTO(hoc_repair_optimize(run, &trial, "smoothed", copy, low), done);
+  hoc_run unbounded = *run; /* (rule 7 is not one of the bounded repairs) */
+  unbounded.deadline = 0;
+  HOC_TRY_GOTO(hoc_repair_optimize(&unbounded, &trial, "smoothed", copy, low), done);
   const hoc_stage *sm = &hoc_stages_last(&trial)->stage;
   if (!sm->stats.tangled && sm->stats.min > last->stats.min) {
     hoc_mesh_destroy(mesh);
