@@ -1,6 +1,6 @@
 /* From HOC_PIPELINE_COARSE_FROM on, hoc_mesh_model optimises at the coarse
  * order first and raises that optimum; the coarse optimisation runs every
- * phase to convergence by the first phase's rule (hoc_mesh_optimize_full:
+ * phase to convergence by the first phase's rule (hoc_mesh_optimize_until's full:
  * the settled rule of tunables.h, HOC_OPT_SETTLED_SWEEPS, off). Its class:
  * the coarse optimum is the start of a costlier optimisation, which it
  * decides (which elements the high order leaves tangled, which faces are

@@ -102,14 +102,6 @@ hoc_status hoc_mesh_optimize(hoc_mesh *mesh, const hoc_optimize_options *options
   return hoc_mesh_optimize_rules(mesh, options, NULL, result);
 }
 
-hoc_status hoc_mesh_optimize_full(hoc_mesh *mesh, const hoc_optimize_options *options,
-                                  hoc_optimize_result *result) {
-  hoc_opt_rules rules;
-  hoc_opt_rules_default(&rules);
-  rules.settled_sweeps = HOC_OPT_STAGNATION_SWEEPS;
-  return hoc_mesh_optimize_rules(mesh, options, &rules, result);
-}
-
 hoc_status hoc_mesh_optimize_until(hoc_mesh *mesh, const hoc_optimize_options *options, int full,
                                    double deadline, hoc_optimize_result *result, int *timed_out) {
   if (timed_out) *timed_out = 0;

@@ -55,7 +55,7 @@
  * SETTLED_SWEEPS / STAGNATION_SWEEPS (the same rate). Ten sweeps there
  * smooth the whole mesh once more for about 1 % of f (impeller_laufrad at
  * order 3: 10 of its 37 sweeps). Not in the pipeline's coarse order
- * (hoc_mesh_optimize_full): its end is where a costlier order starts,
+ * (hoc_mesh_optimize_until's full): its end is where a costlier order starts,
  * and a start a few sweeps short of converged changes which elements that
  * order leaves tangled and so which faces it meshes again (wing_fuselage
  * at order 8: min q 0.0058 against 0.0474 with the coarse order

@@ -217,7 +217,7 @@ hoc_status hoc_repair_optimize(const hoc_run *run, hoc_stages *r, const char *na
 
 /* hoc_repair_optimize of the whole mesh for a mesh that is the start of a
  * costlier optimisation (the coarse order): every phase of it converges
- * by the first phase's rule (hoc_mesh_optimize_full). */
+ * by the first phase's rule (hoc_mesh_optimize_until's full). */
 hoc_status hoc_repair_optimize_start(const hoc_run *run, hoc_stages *r, const char *name,
                                      hoc_mesh *mesh);
 

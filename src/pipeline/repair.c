@@ -25,8 +25,8 @@ static int iteration_event(void *user, const hoc_optimize_iteration *it) {
   return run->o.event(run->o.event_user, &ev);
 }
 
-/* hoc_repair_optimize; full: hoc_mesh_optimize_full; either stops at the
- * repairs' deadline. */
+/* hoc_repair_optimize, stopping at the repairs' deadline; full: every
+ * phase converges by the first phase's rule (hoc_mesh_optimize_until). */
 static hoc_status optimize_stage(const hoc_run *run, hoc_stages *r, const char *name, hoc_mesh *mesh,
                                  const unsigned char *free, int full) {
   const hoc_mesh_options *o = &run->o;
