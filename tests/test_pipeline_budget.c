@@ -10,7 +10,12 @@
  * nanosecond neither hoc_mesh_model (its own linear mesh, or a given one)
  * nor hoc_mesh_repair splits or meshes anything again, and each says why
  * in a note; with a day, the given linear mesh is split in both chains.
+ * Cut part-way: the event of the first split waits out the repair time,
+ * so the split's optimisation starts late; it stops at once, and no
+ * further split follows.
  * SPDX-License-Identifier: GPL-2.0-or-later */
+#define _POSIX_C_SOURCE 200809L /* nanosleep */
+
 #include "hocad.h"
 #include "optimize/optimize.h"
 #include "test_util.h"
@@ -19,17 +24,24 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
-/* Counts the notes saying the repairs' time is over, and the repairs. */
+/* Counts the notes saying the repairs' time is over, and the repairs;
+ * with wait > 0, the first repair's event sleeps that many seconds. */
 typedef struct seen {
-  int late, repairs;
+  int late, repairs, sweeps_after;
+  double wait;
 } seen;
 
 static int on_event(void *user, const hoc_event *ev) {
   seen *s = user;
   if (!ev->message) return 0;
   if (ev->kind == HOC_EVENT_NOTE && strstr(ev->message, "the repairs took the")) s->late++;
-  if (ev->kind == HOC_EVENT_REPAIR) s->repairs++;
+  if (ev->kind == HOC_EVENT_ITERATION && s->repairs > 0) s->sweeps_after++;
+  if (ev->kind == HOC_EVENT_REPAIR && s->repairs++ == 0 && s->wait > 0) {
+    struct timespec t = {(time_t)s->wait, (long)(1e9 * (s->wait - (time_t)s->wait))};
+    nanosleep(&t, NULL);
+  }
   return 0;
 }
 
@@ -87,6 +99,7 @@ static hoc_report *mesh_model(hoc_model *model, const hoc_mesh *lin, double repa
   o.max_iterations = 1;
   o.refinements = 1;
   o.repair_time = repair_time;
+  if (s->wait > 0) o.refinements = 2;
   o.event = on_event;
   o.event_user = s;
   hoc_mesh *mesh = NULL;
@@ -120,6 +133,34 @@ static void test_mesh_model(hoc_model *model) {
     CHECK(hoc_report_refinements(r[2]) == 2 && s[2].late == 0);
   }
   for (int i = 0; i < 3; ++i)
+    hoc_report_destroy(&r[i]);
+  hoc_mesh_destroy(&lin);
+}
+
+/* The time runs out while the first split is optimised: its event waits
+ * past the limit (the limit counts from before it). Without the wait the
+ * same run sweeps after its first split and splits again. */
+static void test_cut_midway(hoc_model *model) {
+  enum { WAITED, NOT };
+  const double limit = 3.0;
+  hoc_mesh *lin = NULL;
+  CHECK_OK(hoc_mesh_generate_linear(model, NULL, &lin));
+  /* NOT: the same options (wait > 0), a nanosecond's sleep and a day */
+  seen s[2] = {{.wait = limit + 0.2}, {.wait = 1e-9}};
+  hoc_report *r[2] = {mesh_model(model, lin, limit, &s[WAITED]),
+                      mesh_model(model, lin, 86400, &s[NOT])};
+  if (r[WAITED] && r[NOT]) {
+    printf("t20 order 5, the first split's event waiting %.1f s past a %.0f s limit: %d "
+           "refinement(s), %d sweep(s) after it, %d note(s) of the time; without the wait: "
+           "%d refinement(s), %d sweep(s)\n",
+           s[WAITED].wait, limit, hoc_report_refinements(r[WAITED]), s[WAITED].sweeps_after,
+           s[WAITED].late, hoc_report_refinements(r[NOT]), s[NOT].sweeps_after);
+    CHECK(hoc_report_refinements(r[WAITED]) == 1 && s[WAITED].repairs == 1);
+    CHECK(s[WAITED].sweeps_after == 0 && s[WAITED].late == 1);
+    CHECK(hoc_report_remeshings(r[WAITED]) == 0);
+    CHECK(hoc_report_refinements(r[NOT]) > 1 && s[NOT].sweeps_after > 0 && s[NOT].late == 0);
+  }
+  for (int i = 0; i < 2; ++i)
     hoc_report_destroy(&r[i]);
   hoc_mesh_destroy(&lin);
 }
@@ -160,6 +201,7 @@ int main(void) {
   if (model) {
     test_optimizer(model);
     test_mesh_model(model);
+    test_cut_midway(model);
     test_repair(model);
   }
   hoc_model_destroy(&model);
