@@ -535,12 +535,12 @@ static hoc_status mesh_model_run(hoc_run *run, hoc_model *model, model_meshes *m
      * is kept if it leaves none tangled (the bottle at order 2: two
      * elements at its thread's end, which two remeshings only make worse).
      * From HOC_PIPELINE_REMESH_FIRST_FROM on, the remeshing comes first
-     * unless the faces fold (see there) */
-    int split_done = 0, across_folds = 0, spent = o->linear || r->remeshings >= o->refinements;
+     * unless no finer mesh opens the elements (see there) */
+    int split_done = 0, unrefinable = 0, spent = o->linear || r->remeshings >= o->refinements;
     if (!spent && !hoc_run_late(run)) {
-      HOC_TRY_GOTO(hoc_repair_tangled_on_folds(run, m->ho, &across_folds), done);
-      if (across_folds || o->order < HOC_PIPELINE_REMESH_FIRST_FROM) {
-        status = hoc_repair_split_first(run, r, &m->ho, across_folds, &split_done);
+      HOC_TRY_GOTO(hoc_repair_tangled_unrefinable(run, m->ho, &unrefinable), done);
+      if (unrefinable || o->order < HOC_PIPELINE_REMESH_FIRST_FROM) {
+        status = hoc_repair_split_first(run, r, &m->ho, unrefinable, &split_done);
         *final = m->ho;
         if (status != HOC_OK || split_done) break;
       }

@@ -119,8 +119,8 @@
 #define HOC_PIPELINE_LINEAR_ALGORITHMS                                                             \
   { HOC_GMSH_MESH_ADAPT, HOC_GMSH_DELAUNAY }
 
-/* Splits per chain where the tangled elements are on faces that fold
- * (hoc_repair_tangled_on_folds): a split adds elements across the fold
+/* Splits per chain where no finer mesh opens the tangled elements
+ * (hoc_repair_tangled_unrefinable): a split adds elements across a fold
  * (surf114.igs, its inverted linear elements split: 29, 67, 148), and each
  * split's optimisation keeps the ones across it tangled to its last sweep. */
 #define HOC_PIPELINE_FOLD_SPLITS 1
@@ -234,10 +234,11 @@ hoc_status hoc_repair_refine_tangled(const hoc_run *run, hoc_stages *r, int n_ke
                                      const hoc_mesh *start, int trial);
 
 /* hoc_repair_refine_tangled on a copy of *ho, kept (*done = 1) only if it
- * leaves no element tangled; with keep_fewest (faces that fold), at most
- * HOC_PIPELINE_FOLD_SPLITS splits per chain, kept if they leave fewer
- * tangled than *ho has, and *done = 1 either way. */
-hoc_status hoc_repair_split_first(const hoc_run *run, hoc_stages *r, hoc_mesh **ho, int keep_fewest,
+ * leaves no element tangled; with unrefinable (hoc_repair_tangled_unrefinable's
+ * nonzero answer, named in the event), at most HOC_PIPELINE_FOLD_SPLITS splits
+ * per chain, kept if they leave fewer tangled than *ho has, and *done = 1
+ * either way. */
+hoc_status hoc_repair_split_first(const hoc_run *run, hoc_stages *r, hoc_mesh **ho, int unrefinable,
                                   int *done);
 
 /* Inverted linear triangles: gmsh's mesh of some B-spline faces has
@@ -253,12 +254,21 @@ hoc_status hoc_repair_split_first(const hoc_run *run, hoc_stages *r, hoc_mesh **
 hoc_status hoc_repair_linear(const hoc_run *run, hoc_model *model, const hoc_linear_options *lo,
                              hoc_mesh **lin);
 
-/* *all: mesh has tangled elements and every face holding one folds (an
- * element of it crosses a fold: hoc_mesh_element_folds). A finer mesh of
- * such a face crosses the fold with more elements (surf114.igs: 26 linear
- * elements across folds of faces 1, 3 and 4; splitting the inverted ones
- * twice makes 148), so these faces are split, never meshed again finer. */
-hoc_status hoc_repair_tangled_on_folds(const hoc_run *run, const hoc_mesh *mesh, int *all);
+/* Where a finer mesh cannot open the tangled elements, *why says why
+ * (HOC_UNREFINABLE_FOLDS | HOC_UNREFINABLE_CUSPS), else it is 0: mesh has
+ * tangled elements, and every face holding one
+ * - folds (an element of it crosses a fold: hoc_mesh_element_folds). A
+ *   finer mesh crosses the fold with more elements (surf114.igs: 26 linear
+ *   elements across folds of faces 1, 3 and 4; splitting the inverted ones
+ *   twice makes 148);
+ * - or has all its tangled elements at a CAD cusp (a corner where two
+ *   curves meet under HOC_PIPELINE_CUSP_DEGREES: hoc_mesh_element_cusp).
+ *   The curved corner keeps the cusp's angle at every size
+ *   (bench/pinch_models.py's crescent_plate at order 10: 5 tangled at its
+ *   cusps; each of two remeshings left 13).
+ * These faces are split, never meshed again finer. */
+enum { HOC_UNREFINABLE_FOLDS = 1, HOC_UNREFINABLE_CUSPS = 2 };
+hoc_status hoc_repair_tangled_unrefinable(const hoc_run *run, const hoc_mesh *mesh, int *why);
 
 /* The faces of the tangled elements of ho (made from lin) get an edge
  * length bound of half their longest edge in *face_size (allocated on first

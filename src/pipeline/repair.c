@@ -239,20 +239,29 @@ hoc_status hoc_repair_refine_tangled(const hoc_run *run, hoc_stages *r, int n_ke
   return status;
 }
 
-hoc_status hoc_repair_split_first(const hoc_run *run, hoc_stages *r, hoc_mesh **ho, int keep_fewest,
+hoc_status hoc_repair_split_first(const hoc_run *run, hoc_stages *r, hoc_mesh **ho, int unrefinable,
                                   int *done) {
   *done = 0;
+  int keep_fewest = unrefinable != 0;
   hoc_mesh *copy = NULL;
   HOC_TRY(hoc_mesh_copy(*ho, &copy));
   hoc_stages trial = *r;
+  const char *where =
+      unrefinable == HOC_UNREFINABLE_FOLDS
+          ? "on faces that fold (their normal reverses inside them), which a finer mesh "
+            "crosses with more elements"
+      : unrefinable == HOC_UNREFINABLE_CUSPS
+          ? "at cusps of the CAD (two curves meeting under 2 degrees), whose angle a finer "
+            "mesh keeps"
+          : "on faces that fold (their normal reverses inside them) or at cusps of the CAD, "
+            "which a finer mesh crosses, or meets at the same angle, with as many elements";
   hoc_status status =
       keep_fewest
           ? hoc_run_event(run, HOC_EVENT_REPAIR,
-                          "the tangled elements are on faces that fold (their normal reverses "
-                          "inside them), which a finer mesh crosses with more elements: "
-                          "at most %d split(s) per chain instead of meshing the "
-                          "faces again (the result with the fewest tangled is kept)",
-                          HOC_PIPELINE_FOLD_SPLITS)
+                          "the tangled elements are %s: at most %d split(s) per chain instead "
+                          "of meshing the faces again (the result with the fewest tangled is "
+                          "kept)",
+                          where, HOC_PIPELINE_FOLD_SPLITS)
           : hoc_run_event(run, HOC_EVENT_REPAIR,
                           "splitting the tangled elements first (kept if that leaves none "
                           "tangled)");
@@ -657,27 +666,42 @@ done:
   return status;
 }
 
-hoc_status hoc_repair_tangled_on_folds(const hoc_run *run, const hoc_mesh *mesh, int *all) {
-  *all = 0;
+hoc_status hoc_repair_tangled_unrefinable(const hoc_run *run, const hoc_mesh *mesh, int *why) {
+  enum { TANGLED = 1, FOLDS = 2, OFF_CUSP = 4 }; /* per face */
+  *why = 0;
   size_t ne = hoc_mesh_num_elements(mesh);
   int nf = mesh->model->n_faces;
-  unsigned char *tangled = NULL, *state = NULL; /* per face: 1 tangled, 2 and folds */
+  unsigned char *tangled = NULL, *state = NULL;
   hoc_status status = HOC_OK;
   HOC_ALLOC_GOTO(tangled, ne, done);
   HOC_ALLOC_GOTO(state, (size_t)nf + 1, done);
   HOC_TRY_GOTO(hoc_mesh_measure(mesh, run->o.measure, NULL, tangled, NULL), done);
   int any = 0;
-  for (size_t e = 0; e < ne; ++e)
-    if (tangled[e]) any = state[mesh->elem_face[e]] = 1;
+  for (size_t e = 0; e < ne; ++e) {
+    if (!tangled[e]) continue;
+    hoc_cusp c;
+    int at_cusp = 0;
+    HOC_TRY_GOTO(hoc_mesh_element_cusp(mesh, e, HOC_PIPELINE_CUSP_DEGREES, &c, &at_cusp), done);
+    any = 1;
+    state[mesh->elem_face[e]] |= TANGLED | (at_cusp ? 0 : OFF_CUSP);
+  }
   for (size_t e = 0; e < ne; ++e) {
     int f = mesh->elem_face[e], folds = 0;
-    if (state[f] != 1) continue;
+    if (!(state[f] & TANGLED) || (state[f] & FOLDS)) continue;
     HOC_TRY_GOTO(hoc_mesh_element_folds(mesh, e, &folds), done);
-    if (folds) state[f] = 2;
+    if (folds) state[f] |= FOLDS;
   }
-  *all = any;
-  for (int f = 0; f < nf; ++f)
-    if (state[f] == 1) *all = 0;
+  int kinds = 0;
+  for (int f = 0; f < nf && any; ++f) {
+    if (!(state[f] & TANGLED)) continue;
+    if (state[f] & FOLDS)
+      kinds |= HOC_UNREFINABLE_FOLDS;
+    else if (!(state[f] & OFF_CUSP))
+      kinds |= HOC_UNREFINABLE_CUSPS;
+    else
+      any = 0; /* a face a finer mesh may serve */
+  }
+  *why = any ? kinds : 0;
 done:
   free(tangled);
   free(state);

@@ -179,10 +179,14 @@ static hoc_status find_tangled(hoc_report *report, const hoc_mesh *mesh, const d
     total += q[e] == 0.0;
   if (!total) return HOC_OK;
   /* elements across a fold of their face: no finer mesh of the same kind avoids those */
-  size_t across = 0;
+  size_t across = 0, at_cusp = 0;
   for (size_t e = 0; e < ne; ++e) {
-    int folds = 0;
-    if (q[e] == 0.0 && hoc_mesh_element_folds(mesh, e, &folds) == HOC_OK) across += folds;
+    int folds = 0, found = 0;
+    hoc_cusp c;
+    if (q[e] != 0.0) continue;
+    if (hoc_mesh_element_folds(mesh, e, &folds) == HOC_OK) across += folds;
+    if (hoc_mesh_element_cusp(mesh, e, HOC_PIPELINE_CUSP_DEGREES, &c, &found) == HOC_OK)
+      at_cusp += found;
   }
   int all_across = opt && across == total; /* optimised, and every one across a fold */
   text t = {0};
@@ -220,6 +224,11 @@ static hoc_status find_tangled(hoc_report *report, const hoc_mesh *mesh, const d
              "; %zu of them cross a fold of their face, where its normal phi_u x phi_v "
              "reverses, which a mesh whose edges do not follow it crosses",
              across);
+  if (at_cusp)
+    text_add(&t,
+             "; %zu of them have a corner at a cusp of the CAD (two curves meeting under 2 "
+             "degrees), whose angle a finer mesh keeps",
+             at_cusp);
   return add_finding(report, HOC_EVENT_WARNING, &t);
 }
 
