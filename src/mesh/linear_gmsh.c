@@ -709,6 +709,7 @@ static hoc_status generate_once(hoc_model *model, const hoc_linear_options *opti
   for (int f = 0; f < model->n_faces; ++f)
     n_timed_out += (crashed ? crashed[f] : skip ? skip[f] : 0) == FACE_TIMED_OUT;
   (*mesh)->timed_out_faces = n_timed_out;
+  (*mesh)->known_failed_faces = n_skipped;
   (*mesh)->mesher_timeout = timeout;
   p.failed = NULL;
 done:

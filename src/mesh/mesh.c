@@ -101,6 +101,7 @@ hoc_status hoc_mesh_copy_failed(const hoc_mesh *from, hoc_mesh *to) {
   }
   to->n_failed_faces = from->n_failed_faces;
   to->timed_out_faces = from->timed_out_faces;
+  to->known_failed_faces = from->known_failed_faces;
   to->mesher_timeout = from->mesher_timeout;
   return HOC_OK;
 }

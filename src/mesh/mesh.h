@@ -73,6 +73,8 @@ struct hoc_mesh {
   int *failed_faces;        /* [n_failed_faces] face indices the mesher could not mesh */
   int timed_out_faces;      /* how many of them gmsh did not finish meshing in
                                mesher_timeout seconds (hoc_linear_options) */
+  int known_failed_faces;   /* how many of them were left out from the model's record
+                               of an earlier meshing, the mesher not run on them */
   double mesher_timeout;    /* (a mesh raised or split from another has its failed faces:
                                hoc_mesh_copy_failed) */
   double off_cad;           /* largest distance of a given node position from its entity
