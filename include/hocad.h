@@ -644,8 +644,10 @@ typedef struct hoc_report hoc_report;
  *  optimised (hoc_mesh_optimize; unless options->optimize is 0; at order
  *  1 only if the linear mesh has tangled elements, which no split or
  *  remeshing follows). Where elements stay tangled: first (below order 6, or where
- *  their faces fold) their split on a copy (as hoc_mesh_repair splits),
- *  kept if it leaves none tangled; else their faces meshed again with
+ *  their faces fold or they have a corner at a CAD cusp) their split on a copy
+ *  (as hoc_mesh_repair splits), kept if it leaves none tangled (at folds and
+ *  cusps, which no finer mesh opens: the fewest tangled kept, and no
+ *  remeshing); else their faces meshed again with
  *  edges half as long and (unless options->size_min is set) a minimum
  *  size ten times smaller, unless that more than quadruples the mesh,
  *  and everything again, at

@@ -14,8 +14,6 @@
  * so the split's optimisation starts late; it stops at once, and no
  * further split follows.
  * SPDX-License-Identifier: GPL-2.0-or-later */
-#define _POSIX_C_SOURCE 200809L /* nanosleep */
-
 #include "hocad.h"
 #include "optimize/optimize.h"
 #include "test_util.h"
@@ -89,17 +87,16 @@ static void test_optimizer(hoc_model *model) {
 }
 
 /* hoc_mesh_model at order 5 with one sweep (lin: a given linear mesh, or
- * NULL) and the repair time given; *s: what it said. */
+ * NULL), the repair time and splits per chain given; *s: what it said. */
 static hoc_report *mesh_model(hoc_model *model, const hoc_mesh *lin, double repair_time,
-                              seen *s) {
+                              int refinements, seen *s) {
   hoc_mesh_options o;
   hoc_mesh_options_default(&o);
   o.order = 5;
   o.linear = lin;
   o.max_iterations = 1;
-  o.refinements = 1;
+  o.refinements = refinements;
   o.repair_time = repair_time;
-  if (s->wait > 0) o.refinements = 2;
   o.event = on_event;
   o.event_user = s;
   hoc_mesh *mesh = NULL;
@@ -114,8 +111,9 @@ static void test_mesh_model(hoc_model *model) {
   hoc_mesh *lin = NULL;
   CHECK_OK(hoc_mesh_generate_linear(model, NULL, &lin));
   seen s[3] = {{0}};
-  hoc_report *r[3] = {mesh_model(model, lin, 1e-9, &s[0]), mesh_model(model, NULL, 1e-9, &s[1]),
-                      mesh_model(model, lin, 86400, &s[2])};
+  hoc_report *r[3] = {mesh_model(model, lin, 1e-9, 1, &s[0]),
+                      mesh_model(model, NULL, 1e-9, 1, &s[1]),
+                      mesh_model(model, lin, 86400, 1, &s[2])};
   for (int i = 0; i < 2; ++i) {
     if (!r[i]) continue;
     printf("t20 order 5, one sweep, %s linear mesh, repair time 1 ns: %d refinement(s), "
@@ -145,10 +143,9 @@ static void test_cut_midway(hoc_model *model) {
   const double limit = 3.0;
   hoc_mesh *lin = NULL;
   CHECK_OK(hoc_mesh_generate_linear(model, NULL, &lin));
-  /* NOT: the same options (wait > 0), a nanosecond's sleep and a day */
-  seen s[2] = {{.wait = limit + 0.2}, {.wait = 1e-9}};
-  hoc_report *r[2] = {mesh_model(model, lin, limit, &s[WAITED]),
-                      mesh_model(model, lin, 86400, &s[NOT])};
+  seen s[2] = {{.wait = limit + 0.2}, {.wait = 0}};
+  hoc_report *r[2] = {mesh_model(model, lin, limit, 2, &s[WAITED]),
+                      mesh_model(model, lin, 86400, 2, &s[NOT])};
   if (r[WAITED] && r[NOT]) {
     printf("t20 order 5, the first split's event waiting %.1f s past a %.0f s limit: %d "
            "refinement(s), %d sweep(s) after it, %d note(s) of the time; without the wait: "

@@ -199,14 +199,14 @@ static void test_tangled_on_folds(void) {
     if (tangled) CHECK_OK(hoc_mesh_measure(lin, run.o.measure, NULL, tangled, NULL));
     for (size_t e = 0; tangled && e < ne; ++e)
       n_tangled += tangled[e] != 0;
-    int all = -1;
-    CHECK_OK(hoc_repair_tangled_unrefinable(&run, lin, &all));
-    printf("%s: %zu elements, %zu tangled, %zu across a fold, all on folded faces %d\n",
-           k == 0 ? "folded square" : "plain square", ne, n_tangled, folds, all);
+    int why = -1;
+    CHECK_OK(hoc_repair_tangled_unrefinable(&run, lin, &why));
+    printf("%s: %zu elements, %zu tangled, %zu across a fold, unrefinable %d\n",
+           k == 0 ? "folded square" : "plain square", ne, n_tangled, folds, why);
     if (k == 0)
-      CHECK(n_tangled > 0 && folds >= n_tangled && all == HOC_UNREFINABLE_FOLDS);
+      CHECK(n_tangled > 0 && folds >= n_tangled && why == HOC_UNREFINABLE_FOLDS);
     else
-      CHECK(n_tangled == 0 && folds == 0 && all == 0);
+      CHECK(n_tangled == 0 && folds == 0 && why == 0);
     free(tangled);
     hoc_mesh_destroy(&lin);
     hoc_model_destroy(&model);

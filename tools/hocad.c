@@ -192,7 +192,7 @@ static const char *usage_mesh =
     "                       triangles are inverted on the CAD, hocad untangles\n"
     "                       them unless this is given)\n"
     "  --refinements N      if elements stay tangled, split them as 'hocad optimize'\n"
-    "                       does (below order 6, or on faces that fold; kept if\n"
+    "                       does (below order 6, or at folds and cusps; kept if\n"
     "                       that leaves none tangled), else mesh their faces again\n"
     "                       with edges half as long (docs/cli.md) and start again,\n"
     "                       at most N times (default 2), then split, N times per\n"

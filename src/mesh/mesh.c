@@ -285,6 +285,60 @@ hoc_status hoc_mesh_element_cusp(const hoc_mesh *mesh, size_t e, double max_angl
   return HOC_OK;
 }
 
+/* Whether element e has corners on curves a and b (two distinct corners). */
+static int bridges(const hoc_mesh *m, size_t e, int a, int b) {
+  const size_t *cn = m->conn + e * (size_t)m->np;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      if (i != j && hoc_node_on_curve(m->model, m->dim[cn[i]], m->entity[cn[i]], a) &&
+          hoc_node_on_curve(m->model, m->dim[cn[j]], m->entity[cn[j]], b))
+        return 1;
+  return 0;
+}
+
+hoc_status hoc_mesh_elements_at_cusps(const hoc_mesh *mesh, double max_angle_degrees,
+                                      const unsigned char *which, unsigned char *at_cusp) {
+  HOC_CHECK(mesh && at_cusp, HOC_ERR_ARGUMENT, "NULL argument");
+  size_t ne = mesh->n_elems, np = (size_t)mesh->np, n_pairs = 0;
+  int pairs[2 * HOC_CUSP_PAIRS];
+  unsigned char *near = NULL; /* a corner of an element at a cusp */
+  HOC_ALLOC(near, mesh->n_nodes + 1);
+  for (size_t e = 0; e < ne; ++e) {
+    at_cusp[e] = 0;
+    const size_t *cn = mesh->conn + e * np;
+    if (mesh->dim[cn[0]] != HOC_ON_VERTEX && mesh->dim[cn[1]] != HOC_ON_VERTEX &&
+        mesh->dim[cn[2]] != HOC_ON_VERTEX)
+      continue;
+    hoc_cusp c;
+    int found = 0; /* a curve the kernel cannot evaluate: no cusp known */
+    if (hoc_mesh_element_cusp(mesh, e, max_angle_degrees, &c, &found) != HOC_OK) found = 0;
+    if (!found) continue;
+    at_cusp[e] = !which || which[e];
+    for (int k = 0; k < 3; ++k)
+      near[cn[k]] = 1;
+    int ab[2] = {-1, -1};
+    for (int i = 0; i < mesh->model->n_curves; ++i)
+      for (int j = 0; j < 2; ++j)
+        if (mesh->model->curves[i].tag == c.curve_tags[j]) ab[j] = i;
+    int known = ab[0] < 0 || ab[1] < 0;
+    for (size_t p = 0; p < n_pairs && !known; ++p)
+      known = pairs[2 * p] == ab[0] && pairs[2 * p + 1] == ab[1];
+    if (!known && n_pairs < HOC_CUSP_PAIRS) {
+      pairs[2 * n_pairs] = ab[0];
+      pairs[2 * n_pairs++ + 1] = ab[1];
+    }
+  }
+  for (size_t e = 0; e < ne; ++e) {
+    const size_t *cn = mesh->conn + e * np;
+    if (at_cusp[e] || (which && !which[e]) || !(near[cn[0]] || near[cn[1]] || near[cn[2]]))
+      continue;
+    for (size_t p = 0; p < n_pairs && !at_cusp[e]; ++p)
+      at_cusp[e] = (unsigned char)bridges(mesh, e, pairs[2 * p], pairs[2 * p + 1]);
+  }
+  free(near);
+  return HOC_OK;
+}
+
 enum { CHUNK = 1024 };
 
 hoc_status hoc_split_groups(const size_t *start, int n_groups, size_t size, size_t **pieces,

@@ -308,6 +308,22 @@ hoc_status hoc_mesh_grid_linear(hoc_model *model, int nu, int nv, hoc_mesh **mes
  *  a valid one. *untangled: how many it untangled. */
 hoc_status hoc_mesh_polish(hoc_mesh *mesh, hoc_measure measure, int fix_curves, size_t *untangled);
 
+/* The most pairs of curves meeting at a cusp that
+ * hoc_mesh_elements_at_cusps tells elements bridging (more are ignored). */
+#define HOC_CUSP_PAIRS 64
+
+/** at_cusp[e] = 1 for each element flagged in which[e] (every element if
+ *  which is NULL) that is at a cusp of the CAD: it has a corner at one
+ *  (hoc_mesh_element_cusp, under max_angle_degrees), or it shares a node
+ *  with such an element and has corners on both curves of its cusp. The
+ *  gap between those curves narrows to nothing at the vertex, so at every
+ *  size the elements next to it bridge the gap and follow both curves
+ *  (crescent_plate at order 10: the neighbour of a corner element, its
+ *  corners 0.05 from the other curve along an edge of 0.47). A curve the
+ *  kernel cannot evaluate counts as no cusp. at_cusp[n_elems]. */
+hoc_status hoc_mesh_elements_at_cusps(const hoc_mesh *mesh, double max_angle_degrees,
+                                      const unsigned char *which, unsigned char *at_cusp);
+
 /** Why an order-1 element the measure finds tangled is (mesh/inverted.c). */
 typedef enum hoc_inverted_kind {
   HOC_INVERTED_NONE = 0,        /* not tangled */

@@ -261,11 +261,12 @@ hoc_status hoc_repair_linear(const hoc_run *run, hoc_model *model, const hoc_lin
  *   finer mesh crosses the fold with more elements (surf114.igs: 26 linear
  *   elements across folds of faces 1, 3 and 4; splitting the inverted ones
  *   twice makes 148);
- * - or has all its tangled elements at a CAD cusp (a corner where two
- *   curves meet under HOC_PIPELINE_CUSP_DEGREES: hoc_mesh_element_cusp).
- *   The curved corner keeps the cusp's angle at every size
- *   (bench/pinch_models.py's crescent_plate at order 10: 5 tangled at its
- *   cusps; each of two remeshings left 13).
+ * - or has all its tangled elements at a CAD cusp, where two curves meet
+ *   under HOC_PIPELINE_CUSP_DEGREES (hoc_mesh_elements_at_cusps: a corner
+ *   there, or next to such an element across the gap between the curves).
+ *   The curved corner keeps the cusp's angle at every size, and the gap
+ *   narrows to nothing (bench/pinch_models.py's crescent_plate at order 4
+ *   with one sweep: 3 tangled at its cusps; remeshing gives 8, then 6).
  * These faces are split, never meshed again finer. */
 enum { HOC_UNREFINABLE_FOLDS = 1, HOC_UNREFINABLE_CUSPS = 2 };
 hoc_status hoc_repair_tangled_unrefinable(const hoc_run *run, const hoc_mesh *mesh, int *why);

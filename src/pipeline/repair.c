@@ -246,15 +246,22 @@ hoc_status hoc_repair_split_first(const hoc_run *run, hoc_stages *r, hoc_mesh **
   hoc_mesh *copy = NULL;
   HOC_TRY(hoc_mesh_copy(*ho, &copy));
   hoc_stages trial = *r;
-  const char *where =
-      unrefinable == HOC_UNREFINABLE_FOLDS
-          ? "on faces that fold (their normal reverses inside them), which a finer mesh "
-            "crosses with more elements"
-      : unrefinable == HOC_UNREFINABLE_CUSPS
-          ? "at cusps of the CAD (two curves meeting under 2 degrees), whose angle a finer "
-            "mesh keeps"
-          : "on faces that fold (their normal reverses inside them) or at cusps of the CAD, "
-            "which a finer mesh crosses, or meets at the same angle, with as many elements";
+  char where[256];
+  snprintf(where, sizeof where, "%s",
+           unrefinable == HOC_UNREFINABLE_FOLDS
+               ? "on faces that fold (their normal reverses inside them), which a finer mesh "
+                 "crosses with more elements"
+               : "");
+  if (unrefinable & HOC_UNREFINABLE_CUSPS)
+    snprintf(where, sizeof where,
+             "%sat cusps of the CAD (two curves meeting under %g degrees), %s",
+             unrefinable & HOC_UNREFINABLE_FOLDS
+                 ? "on faces that fold (their normal reverses inside them) or "
+                 : "",
+             HOC_PIPELINE_CUSP_DEGREES,
+             unrefinable & HOC_UNREFINABLE_FOLDS
+                 ? "which a finer mesh crosses with more elements or meets at the same angle"
+                 : "whose angle a finer mesh keeps");
   hoc_status status =
       keep_fewest
           ? hoc_run_event(run, HOC_EVENT_REPAIR,
@@ -671,19 +678,19 @@ hoc_status hoc_repair_tangled_unrefinable(const hoc_run *run, const hoc_mesh *me
   *why = 0;
   size_t ne = hoc_mesh_num_elements(mesh);
   int nf = mesh->model->n_faces;
-  unsigned char *tangled = NULL, *state = NULL;
+  unsigned char *tangled = NULL, *state = NULL, *at_cusp = NULL;
   hoc_status status = HOC_OK;
   HOC_ALLOC_GOTO(tangled, ne, done);
+  HOC_ALLOC_GOTO(at_cusp, ne + 1, done);
   HOC_ALLOC_GOTO(state, (size_t)nf + 1, done);
   HOC_TRY_GOTO(hoc_mesh_measure(mesh, run->o.measure, NULL, tangled, NULL), done);
+  HOC_TRY_GOTO(hoc_mesh_elements_at_cusps(mesh, HOC_PIPELINE_CUSP_DEGREES, tangled, at_cusp),
+               done);
   int any = 0;
   for (size_t e = 0; e < ne; ++e) {
     if (!tangled[e]) continue;
-    hoc_cusp c;
-    int at_cusp = 0;
-    HOC_TRY_GOTO(hoc_mesh_element_cusp(mesh, e, HOC_PIPELINE_CUSP_DEGREES, &c, &at_cusp), done);
     any = 1;
-    state[mesh->elem_face[e]] |= TANGLED | (at_cusp ? 0 : OFF_CUSP);
+    state[mesh->elem_face[e]] |= TANGLED | (at_cusp[e] ? 0 : OFF_CUSP);
   }
   for (size_t e = 0; e < ne; ++e) {
     int f = mesh->elem_face[e], folds = 0;
@@ -705,5 +712,6 @@ hoc_status hoc_repair_tangled_unrefinable(const hoc_run *run, const hoc_mesh *me
 done:
   free(tangled);
   free(state);
+  free(at_cusp);
   return status;
 }

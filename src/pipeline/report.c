@@ -180,15 +180,21 @@ static hoc_status find_tangled(hoc_report *report, const hoc_mesh *mesh, const d
   if (!total) return HOC_OK;
   /* elements across a fold of their face: no finer mesh of the same kind avoids those */
   size_t across = 0, at_cusp = 0;
+  unsigned char *tangled = NULL, *cusp = NULL;
+  HOC_ALLOC(tangled, ne);
+  hoc_status status = HOC_OK;
+  HOC_ALLOC_GOTO(cusp, ne, done);
+  for (size_t e = 0; e < ne; ++e)
+    tangled[e] = q[e] == 0.0;
+  HOC_TRY_GOTO(hoc_mesh_elements_at_cusps(mesh, HOC_PIPELINE_CUSP_DEGREES, tangled, cusp), done);
   for (size_t e = 0; e < ne; ++e) {
-    int folds = 0, found = 0;
-    hoc_cusp c;
+    int folds = 0;
     if (q[e] != 0.0) continue;
     if (hoc_mesh_element_folds(mesh, e, &folds) == HOC_OK) across += folds;
-    if (hoc_mesh_element_cusp(mesh, e, HOC_PIPELINE_CUSP_DEGREES, &c, &found) == HOC_OK)
-      at_cusp += found;
+    at_cusp += cusp[e];
   }
   int all_across = opt && across == total; /* optimised, and every one across a fold */
+  int all_at_cusp = opt && at_cusp == total && !across;
   text t = {0};
   const hoc_stage *s = opt ? &opt->stage : NULL;
   if (all_across)
@@ -197,6 +203,13 @@ static hoc_status find_tangled(hoc_report *report, const hoc_mesh *mesh, const d
              "phi_v reverses (the CAD face folds on itself; a mesh whose edges do not follow the "
              "fold crosses it, a finer one with more elements):",
              total);
+  else if (all_at_cusp)
+    text_add(&t,
+             "%zu element(s) tangled at a cusp of the CAD, where two of its curves meet under "
+             "%g degrees (a curved corner keeps that angle at every size, so a finer mesh does "
+             "not open it%s):",
+             total, HOC_PIPELINE_CUSP_DEGREES,
+             opt->result.stopped_at_limit ? "; more iterations may: raise --max-iterations" : "");
   else if (opt && !s->converged && opt->result.stopped_at_limit && s->iterations >= 10 &&
            2 * opt->result.best_iteration <= s->iterations)
     text_add(&t,
@@ -224,12 +237,16 @@ static hoc_status find_tangled(hoc_report *report, const hoc_mesh *mesh, const d
              "; %zu of them cross a fold of their face, where its normal phi_u x phi_v "
              "reverses, which a mesh whose edges do not follow it crosses",
              across);
-  if (at_cusp)
+  if (at_cusp && !all_at_cusp)
     text_add(&t,
-             "; %zu of them have a corner at a cusp of the CAD (two curves meeting under 2 "
-             "degrees), whose angle a finer mesh keeps",
-             at_cusp);
-  return add_finding(report, HOC_EVENT_WARNING, &t);
+             "; %zu of them are at a cusp of the CAD (two curves meeting under %g degrees), "
+             "whose angle a finer mesh keeps",
+             at_cusp, HOC_PIPELINE_CUSP_DEGREES);
+  status = add_finding(report, HOC_EVENT_WARNING, &t);
+done:
+  free(tangled);
+  free(cusp);
+  return status;
 }
 
 /* Elements that end below 0.9 x the linear mesh's worst and have a corner at
@@ -268,10 +285,11 @@ static hoc_status find_cusps(hoc_report *report, const hoc_stages *r, const hoc_
   text t = {0};
   text_add(&t,
            "%zu of the %zu element(s) below 0.9 x the linear mesh's min q (%.4f) have a corner "
-           "at a cusp of the CAD, where two of its curves meet at under 2 degrees (%s%s): "
+           "at a cusp of the CAD, where two of its curves meet at under %g degrees (%s%s): "
            "following both curves, such an element closes there as the order grows; the "
            "elements at no cusp have min q %.4f",
-           at_cusp, low, r->s[0].stage.stats.min, list, at_cusp > 3 ? "; ..." : "", rest);
+           at_cusp, low, r->s[0].stage.stats.min, HOC_PIPELINE_CUSP_DEGREES, list,
+           at_cusp > 3 ? "; ..." : "", rest);
   return add_finding(report, HOC_EVENT_NOTE, &t);
 }
 
