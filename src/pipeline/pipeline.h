@@ -29,8 +29,8 @@
  * exactly: bench/pinch_models.py's crescent_plate at order 10 keeps 5
  * elements tangled at its cusps through its two splits (372 s after a
  * first optimised mesh of 86 s) and, were it remeshed, through two
- * remeshings from 824 elements to 11 586. The growth is the remeshing's (HOC_PIPELINE_REMESH_GROWTH): one
- * remeshing may quadruple the mesh. */
+ * remeshings from 824 elements to 11 586. The growth is the remeshing's
+ * (HOC_PIPELINE_REMESH_GROWTH): one remeshing may quadruple the mesh. */
 #define HOC_PIPELINE_REPAIR_GROWTH HOC_PIPELINE_REMESH_GROWTH
 #define HOC_PIPELINE_REPAIR_SECONDS 60
 /* A remeshing bounds the edges on the faces of tangled elements by this
