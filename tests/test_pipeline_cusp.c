@@ -84,9 +84,8 @@ static void cusp_curves(const hoc_mesh *m, size_t e, int ab[2]) {
   int found = 0;
   ab[0] = ab[1] = -1;
   CHECK_OK(hoc_mesh_element_cusp(m, e, HOC_PIPELINE_CUSP_DEGREES, &c, &found));
-  for (int i = 0; found && i < m->model->n_curves; ++i)
-    for (int j = 0; j < 2; ++j)
-      if (m->model->curves[i].tag == c.curve_tags[j]) ab[j] = i;
+  for (int j = 0; found && j < 2; ++j)
+    ab[j] = hoc_cad_curve_index(m->model, c.curve_tags[j]);
 }
 
 /* Corners of e on curve c (its ends included). */

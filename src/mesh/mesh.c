@@ -316,10 +316,8 @@ hoc_status hoc_mesh_elements_at_cusps(const hoc_mesh *mesh, double max_angle_deg
     at_cusp[e] = !which || which[e];
     for (int k = 0; k < 3; ++k)
       near[cn[k]] = 1;
-    int ab[2] = {-1, -1};
-    for (int i = 0; i < mesh->model->n_curves; ++i)
-      for (int j = 0; j < 2; ++j)
-        if (mesh->model->curves[i].tag == c.curve_tags[j]) ab[j] = i;
+    int ab[2] = {hoc_cad_curve_index(mesh->model, c.curve_tags[0]),
+                 hoc_cad_curve_index(mesh->model, c.curve_tags[1])};
     int known = ab[0] < 0 || ab[1] < 0;
     for (size_t p = 0; p < n_pairs && !known; ++p)
       known = pairs[2 * p] == ab[0] && pairs[2 * p + 1] == ab[1];

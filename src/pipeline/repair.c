@@ -246,22 +246,19 @@ hoc_status hoc_repair_split_first(const hoc_run *run, hoc_stages *r, hoc_mesh **
   hoc_mesh *copy = NULL;
   HOC_TRY(hoc_mesh_copy(*ho, &copy));
   hoc_stages trial = *r;
+  int folds = unrefinable & HOC_UNREFINABLE_FOLDS, cusps = unrefinable & HOC_UNREFINABLE_CUSPS;
+  char at_cusps[80] = "";
+  if (cusps)
+    snprintf(at_cusps, sizeof at_cusps,
+             "at cusps of the CAD (two curves meeting under %g degrees)",
+             HOC_PIPELINE_CUSP_DEGREES);
   char where[256];
-  snprintf(where, sizeof where, "%s",
-           unrefinable == HOC_UNREFINABLE_FOLDS
-               ? "on faces that fold (their normal reverses inside them), which a finer mesh "
-                 "crosses with more elements"
-               : "");
-  if (unrefinable & HOC_UNREFINABLE_CUSPS)
-    snprintf(where, sizeof where,
-             "%sat cusps of the CAD (two curves meeting under %g degrees), %s",
-             unrefinable & HOC_UNREFINABLE_FOLDS
-                 ? "on faces that fold (their normal reverses inside them) or "
-                 : "",
-             HOC_PIPELINE_CUSP_DEGREES,
-             unrefinable & HOC_UNREFINABLE_FOLDS
-                 ? "which a finer mesh crosses with more elements or meets at the same angle"
-                 : "whose angle a finer mesh keeps");
+  snprintf(where, sizeof where, "%s%s%s, %s",
+           folds ? "on faces that fold (their normal reverses inside them)" : "",
+           folds && cusps ? " or " : "", at_cusps,
+           !cusps  ? "which a finer mesh crosses with more elements"
+           : folds ? "which a finer mesh crosses with more elements or meets at the same angle"
+                   : "whose angle a finer mesh keeps");
   hoc_status status =
       keep_fewest
           ? hoc_run_event(run, HOC_EVENT_REPAIR,
