@@ -27,9 +27,9 @@
  * sends the chain through remeshings that multiply the mesh and splits,
  * each followed by a high-order optimisation that tests every step
  * exactly: bench/pinch_models.py's crescent_plate at order 10 keeps 5
- * elements tangled at its cusps through its two splits (372 s after a
- * first optimised mesh of 86 s) and, were it remeshed, through two
- * remeshings from 824 elements to 11 586. The growth is the remeshing's
+ * elements tangled at its cusps through two splits (372 s after a first
+ * optimised mesh of 86 s, were it split: hoc_repair_unrefinable_note) and
+ * two remeshings from 824 elements to 11 586. The growth is the remeshing's
  * (HOC_PIPELINE_REMESH_GROWTH): one remeshing may quadruple the mesh. */
 #define HOC_PIPELINE_REPAIR_GROWTH HOC_PIPELINE_REMESH_GROWTH
 #define HOC_PIPELINE_REPAIR_SECONDS 60
@@ -118,12 +118,6 @@
  * default Frontal-Delaunay, 0 with MeshAdapt, 4 with Delaunay). */
 #define HOC_PIPELINE_LINEAR_ALGORITHMS                                                             \
   { HOC_GMSH_MESH_ADAPT, HOC_GMSH_DELAUNAY }
-
-/* Splits per chain where no finer mesh opens the tangled elements
- * (hoc_repair_tangled_unrefinable): a split adds elements across a fold
- * (surf114.igs, its inverted linear elements split: 29, 67, 148), and each
- * split's optimisation keeps the ones across it tangled to its last sweep. */
-#define HOC_PIPELINE_FOLD_SPLITS 1
 
 /* The most stages one attempt has: linear, high-order, split, optimized,
  * smoothed, written (hoc_mesh_repair: input, re-placed or split, optimized). */
@@ -234,12 +228,17 @@ hoc_status hoc_repair_refine_tangled(const hoc_run *run, hoc_stages *r, int n_ke
                                      const hoc_mesh *start, int trial);
 
 /* hoc_repair_refine_tangled on a copy of *ho, kept (*done = 1) only if it
- * leaves no element tangled; with unrefinable (hoc_repair_tangled_unrefinable's
- * nonzero answer, named in the event), at most HOC_PIPELINE_FOLD_SPLITS splits
- * per chain, kept if they leave fewer tangled than *ho has, and *done = 1
- * either way. */
-hoc_status hoc_repair_split_first(const hoc_run *run, hoc_stages *r, hoc_mesh **ho, int unrefinable,
-                                  int *done);
+ * leaves no element tangled (or, once the run is late, fewer). */
+hoc_status hoc_repair_split_first(const hoc_run *run, hoc_stages *r, hoc_mesh **ho, int *done);
+
+/* The event that says why tangled elements are left as they are:
+ * unrefinable is hoc_repair_tangled_unrefinable's nonzero answer. A split
+ * adds elements across a fold (surf114.igs, its inverted linear elements
+ * split: 29, 67, 148) or keeps a cusp's angle in the child at its corner,
+ * and each split's optimisation keeps them tangled to its last sweep: on
+ * surf114.igs at orders 2, 3 and 5 and on crescent_plate at order 10 no
+ * split left fewer tangled, and they took 3, 9, 54 and 372 s. */
+hoc_status hoc_repair_unrefinable_note(const hoc_run *run, int unrefinable);
 
 /* Inverted linear triangles: gmsh's mesh of some B-spline faces has
  * straight triangles whose normal turns against the face's at a corner
@@ -267,7 +266,8 @@ hoc_status hoc_repair_linear(const hoc_run *run, hoc_model *model, const hoc_lin
  *   The curved corner keeps the cusp's angle at every size, and the gap
  *   narrows to nothing (bench/pinch_models.py's crescent_plate at order 4
  *   with one sweep: 3 tangled at its cusps; remeshing gives 8, then 6).
- * These faces are split, never meshed again finer. */
+ * Their elements are neither split nor meshed again finer
+ * (hoc_repair_unrefinable_note). */
 enum { HOC_UNREFINABLE_FOLDS = 1, HOC_UNREFINABLE_CUSPS = 2 };
 hoc_status hoc_repair_tangled_unrefinable(const hoc_run *run, const hoc_mesh *mesh, int *why);
 
