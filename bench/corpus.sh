@@ -31,9 +31,10 @@
 #   --mesh-args  more options for each `hocad mesh` run of the tables (split
 #                at spaces), e.g. "--size-factor 2"
 # Bounds (bench/report_line.py): exit 0, 0 tangled, min q >= 0.9 x linear
-# min q (or hocad's note puts every element below that at a CAD cusp), mean
-# q >= linear mean q - 0.02, with --cad-check every node on the CAD, and at
-# order 3 at most 5 s of hocad's own time per 10^4 elements.
+# min q (or hocad's notes put every element below that at a CAD cusp or
+# across a pinch of its face), mean q >= linear mean q - 0.02, with
+# --cad-check every node on the CAD, and at order 3 at most 5 s of hocad's
+# own time per 10^4 elements.
 # OMP_WAIT_POLICY=passive: on a shared machine spinning OpenMP threads slow
 # 2-thread runs a lot.
 # SPDX-License-Identifier: GPL-2.0-or-later

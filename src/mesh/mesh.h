@@ -324,6 +324,27 @@ hoc_status hoc_mesh_polish(hoc_mesh *mesh, hoc_measure measure, int fix_curves, 
 hoc_status hoc_mesh_elements_at_cusps(const hoc_mesh *mesh, double max_angle_degrees,
                                       const unsigned char *which, unsigned char *at_cusp);
 
+/** A line of a face's (u, v) that maps to one point (mesh/pinch.c): u = c
+ *  (dir 0) or v = c (dir 1). */
+typedef struct hoc_pinch {
+  int dir;
+  double c;
+} hoc_pinch;
+
+/** The pinches of face f (at most max, *n of them): iso-lines strictly
+ *  inside its range of (u, v) whose image, over the face's whole range of
+ *  the other parameter, spreads less than share x the face's size (the
+ *  largest side of its box). Narrowest lines searched from 64 probes per
+ *  direction. */
+hoc_status hoc_face_pinches(const hoc_model *model, int f, double share, hoc_pinch *pinch, int max,
+                           int *n);
+
+/** Whether element e's nodes lie on both sides (in their (u, v)) of one of
+ *  the n pinches of its face: its curved map passes through the pinch's
+ *  point, where its Jacobian vanishes. */
+int hoc_mesh_element_crosses_pinch(const hoc_mesh *mesh, size_t e, const hoc_pinch *pinch,
+                                   int n);
+
 /** Why an order-1 element the measure finds tangled is (mesh/inverted.c). */
 typedef enum hoc_inverted_kind {
   HOC_INVERTED_NONE = 0,        /* not tangled */

@@ -47,6 +47,17 @@
  * named, since curving cannot open them. */
 #define HOC_PIPELINE_POOR 0.9
 #define HOC_PIPELINE_CUSP_DEGREES 2.0
+/* A pinch of a face (hoc_face_pinches) is an iso-line inside its (u, v)
+ * whose image spreads less than this share of the face's size: a spline
+ * patch whose control row collapses to a point inside it, as a bow tie
+ * (bench/freeform_models.py's pinched_sheet: the line maps to one point to
+ * 1e-14; surf114.igs's face 1: 0.003 of 90). An element across it is
+ * curved through that point and its q falls as the order grows
+ * (pinched_sheet: min q 0.52, 0.43 and 0.25 at orders 3, 5 and 10, its
+ * linear mesh 0.57): the poor elements' note names them (report.c), at
+ * most HOC_PINCHES per face. */
+#define HOC_PIPELINE_PINCH_SHARE 1e-3
+#define HOC_PINCHES 4
 /* hoc_mesh_repair starts from nodes re-placed from the corners unless they
  * tangle over 1/HOC_PIPELINE_REPLACED_SLACK more elements than the input's
  * (another mesher's placement and hocad's fold in different places). */

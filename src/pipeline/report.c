@@ -4,6 +4,7 @@
 #include "mesh/mesh.h"
 #include "pipeline/pipeline.h"
 
+#include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -249,48 +250,95 @@ done:
   return status;
 }
 
+/* The pinches of face f, found on first use: n[f] < 0 until then. */
+static hoc_status face_pinches(const hoc_mesh *mesh, int f, hoc_pinch (*pinch)[HOC_PINCHES],
+                               int *n) {
+  if (n[f] < 0)
+    HOC_TRY(hoc_face_pinches(mesh->model, f, HOC_PIPELINE_PINCH_SHARE, pinch[f], HOC_PINCHES,
+                             &n[f]));
+  return HOC_OK;
+}
+
 /* Elements that end below 0.9 x the linear mesh's worst and have a corner at
- * a cusp of the CAD: say so, and what the rest of the mesh reaches (see
- * hoc_cusp: a cusp element's curved corner closes where its straight one
- * does not; raising grades its edges against that, which can still fall
- * short, e.g. on a mesh read from a file). */
+ * a cusp of the CAD (see hoc_cusp: a cusp element's curved corner closes
+ * where its straight one does not; raising grades its edges against that,
+ * which can still fall short, e.g. on a mesh read from a file), or, at no
+ * cusp, cross a pinch of their face (hoc_face_pinches: the curved element
+ * passes through the pinch's point): say so, and what the rest of the mesh
+ * reaches. */
 static hoc_status find_cusps(hoc_report *report, const hoc_stages *r, const hoc_mesh *mesh,
                              const double *q) {
-  double bound = HOC_PIPELINE_POOR * r->s[0].stage.stats.min, rest = 1; /* q <= 1 */
-  size_t ne = hoc_mesh_num_elements(mesh), low = 0, at_cusp = 0;
-  char list[512] = "";
-  size_t len = 0;
+  double bound = HOC_PIPELINE_POOR * r->s[0].stage.stats.min;
+  double rest = 1, neither = 1; /* q <= 1: at no cusp; at no cusp and across no pinch */
+  size_t ne = hoc_mesh_num_elements(mesh), low = 0, at_cusp = 0, at_pinch = 0;
+  int nf = hoc_model_num_faces(mesh->model);
+  char list[512] = "", plist[512] = "";
+  size_t len = 0, plen = 0;
   const hoc_stage_record *opt = optimized_stage(r);
   if (!opt || !opt->stage.converged) return HOC_OK; /* a low q may still be the optimiser's */
   if (r->n < 2 || !(r->s[r->n - 1].stage.stats.min < bound)) return HOC_OK; /* none below */
+  hoc_pinch(*pinch)[HOC_PINCHES] = NULL;
+  int *n_pinch = NULL;
+  hoc_status status = HOC_OK;
+  HOC_ALLOC_GOTO(pinch, (size_t)nf + 1, done);
+  HOC_ALLOC_GOTO(n_pinch, (size_t)nf + 1, done);
+  for (int f = 0; f < nf; ++f)
+    n_pinch[f] = -1;
   for (size_t e = 0; e < ne; ++e) {
-    if (q[e] == 0.0 || (q[e] >= bound && q[e] >= rest)) continue; /* changes nothing below */
+    if (q[e] == 0.0 || (q[e] >= bound && q[e] >= neither)) continue; /* changes nothing below */
     hoc_cusp c;
-    int found = 0;
+    int found = 0, f = mesh->elem_face[e];
     if (hoc_mesh_element_cusp(mesh, e, HOC_PIPELINE_CUSP_DEGREES, &c, &found) != HOC_OK) found = 0;
-    if (!found) {
-      if (q[e] < rest) rest = q[e];
-      low += q[e] < bound;
+    if (found) {
+      if (!(q[e] < bound)) continue;
+      ++low;
+      if (++at_cusp <= 3 && len < sizeof list)
+        len += (size_t)snprintf(list + len, sizeof list - len,
+                                "%selement %zu at vertex %d (curves %d and %d, %.2g degrees)",
+                                at_cusp > 1 ? "; " : "", e + 1, c.vertex_tag, c.curve_tags[0],
+                                c.curve_tags[1], c.angle_degrees);
       continue;
     }
-    if (!(q[e] < bound)) continue;
-    ++low;
-    if (++at_cusp <= 3 && len < sizeof list)
-      len += (size_t)snprintf(list + len, sizeof list - len,
-                              "%selement %zu at vertex %d (curves %d and %d, %.2g degrees)",
-                              at_cusp > 1 ? "; " : "", e + 1, c.vertex_tag, c.curve_tags[0],
-                              c.curve_tags[1], c.angle_degrees);
+    rest = fmin(rest, q[e]);
+    HOC_TRY_GOTO(face_pinches(mesh, f, pinch, n_pinch), done);
+    if (hoc_mesh_element_crosses_pinch(mesh, e, pinch[f], n_pinch[f])) {
+      if (!(q[e] < bound)) continue;
+      ++low;
+      if (++at_pinch <= 3 && plen < sizeof plist)
+        plen += (size_t)snprintf(plist + plen, sizeof plist - plen, "%selement %zu of face %d",
+                                 at_pinch > 1 ? "; " : "", e + 1,
+                                 hoc_mesh_element_face_tag(mesh, e));
+      continue;
+    }
+    neither = fmin(neither, q[e]);
+    low += q[e] < bound;
   }
-  if (!at_cusp) return HOC_OK;
-  text t = {0};
-  text_add(&t,
-           "%zu of the %zu element(s) below 0.9 x the linear mesh's min q (%.4f) have a corner "
-           "at a cusp of the CAD, where two of its curves meet at under %g degrees (%s%s): "
-           "following both curves, such an element closes there as the order grows; the "
-           "elements at no cusp have min q %.4f",
-           at_cusp, low, r->s[0].stage.stats.min, HOC_PIPELINE_CUSP_DEGREES, list,
-           at_cusp > 3 ? "; ..." : "", rest);
-  return add_finding(report, HOC_EVENT_NOTE, &t);
+  if (at_cusp) {
+    text t = {0};
+    text_add(&t,
+             "%zu of the %zu element(s) below 0.9 x the linear mesh's min q (%.4f) have a corner "
+             "at a cusp of the CAD, where two of its curves meet at under %g degrees (%s%s): "
+             "following both curves, such an element closes there as the order grows; the "
+             "elements at no cusp have min q %.4f",
+             at_cusp, low, r->s[0].stage.stats.min, HOC_PIPELINE_CUSP_DEGREES, list,
+             at_cusp > 3 ? "; ..." : "", rest);
+    HOC_TRY_GOTO(add_finding(report, HOC_EVENT_NOTE, &t), done);
+  }
+  if (at_pinch) {
+    text t = {0};
+    text_add(&t,
+             "%zu of the %zu element(s) below 0.9 x the linear mesh's min q (%.4f) cross a "
+             "pinch of their face, a line of its (u, v) that the CAD maps to one point (%s%s): "
+             "curved through that point, such an element narrows there as the order grows; "
+             "the elements at no cusp and across no pinch have min q %.4f",
+             at_pinch, low, r->s[0].stage.stats.min, plist, at_pinch > 3 ? "; ..." : "",
+             neither);
+    HOC_TRY_GOTO(add_finding(report, HOC_EVENT_NOTE, &t), done);
+  }
+done:
+  free(pinch);
+  free(n_pinch);
+  return status;
 }
 
 hoc_status hoc_report_finish(hoc_report *report, const hoc_stages *r, const hoc_mesh *final,

@@ -1,0 +1,114 @@
+/* Pinches (mesh/pinch.c): iso-lines inside a face's (u, v) that the CAD
+ * maps to one point, and the poor elements' note that names the elements
+ * across them (hocad mesh, docs/quality.md).
+ * - Analytic faces: a cone's apex is a side of its (u, v), not inside it;
+ *   the folded square's fold line maps to a line, not a point; a plane
+ *   has neither: no pinch on any of them.
+ * - pinched_sheet.step (a bicubic sheet whose middle control row is one
+ *   point, a triple knot at u = 1): one pinch, u = 1. surf114.igs's face 1
+ *   (an IGES spline surface): a pinch near u = 7.64, where its iso-line
+ *   spreads 0.003 of the face's 90.
+ * - pinched_sheet at order 5: elements end below 0.9 x the linear mesh's
+ *   min q, every one of them across the pinch, and the note says so.
+ * SPDX-License-Identifier: GPL-2.0-or-later */
+#include "hocad.h"
+#include "mesh/mesh.h"
+#include "pipeline/pipeline.h"
+#include "test_util.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define DATA HOC_SOURCE_DIR "/tests/data/"
+
+static void test_analytic(void) {
+  const hoc_analytic_kind kinds[3] = {HOC_ANALYTIC_CONE, HOC_ANALYTIC_FOLD, HOC_ANALYTIC_PLANE};
+  const double b[3] = {2.0, 0.5, 0.0};
+  for (int k = 0; k < 3; ++k) {
+    hoc_model *model = NULL;
+    CHECK_OK(hoc_cad_create_analytic(kinds[k], 1.0, b[k], &model));
+    if (!model) continue;
+    hoc_pinch p[HOC_PINCHES];
+    int n = -1;
+    CHECK_OK(hoc_face_pinches(model, 0, HOC_PIPELINE_PINCH_SHARE, p, HOC_PINCHES, &n));
+    printf("analytic face %d: %d pinch(es)\n", k, n);
+    CHECK(n == 0);
+    hoc_model_destroy(&model);
+  }
+}
+
+/* The pinches of the first face of the model at path: *n of them in p. */
+static void pinches_of(const char *path, hoc_pinch *p, int *n) {
+  hoc_model *model = NULL;
+  *n = -1;
+  CHECK_OK(hoc_model_open(path, &model));
+  if (!model) return;
+  CHECK_OK(hoc_face_pinches(model, 0, HOC_PIPELINE_PINCH_SHARE, p, HOC_PINCHES, n));
+  hoc_model_destroy(&model);
+}
+
+static void test_files(void) {
+  hoc_pinch p[HOC_PINCHES];
+  int n;
+  pinches_of(DATA "pinched_sheet.step", p, &n);
+  printf("pinched_sheet: %d pinch(es)%s", n, n > 0 ? "," : "\n");
+  for (int k = 0; k < n; ++k)
+    printf(" %s = %.9f%s", p[k].dir ? "v" : "u", p[k].c, k + 1 < n ? "," : "\n");
+  CHECK(n == 1 && p[0].dir == 0 && fabs(p[0].c - 1.0) < 1e-6);
+  pinches_of(DATA "surf114_face1.brep", p, &n);
+  int near = 0;
+  for (int k = 0; k < n; ++k)
+    near += p[k].dir == 0 && p[k].c > 7.6 && p[k].c < 7.7;
+  printf("surf114's face 1: %d pinch(es), %d near u = 7.64\n", n, near);
+  CHECK(near == 1);
+}
+
+static void test_note(void) {
+  hoc_model *model = NULL;
+  CHECK_OK(hoc_model_open(DATA "pinched_sheet.step", &model));
+  if (!model) return;
+  hoc_mesh_options o;
+  hoc_mesh_options_default(&o);
+  o.order = 5;
+  hoc_mesh *mesh = NULL;
+  hoc_report *r = NULL;
+  CHECK_OK(hoc_mesh_model(model, &o, &mesh, &r));
+  size_t ne = mesh ? hoc_mesh_num_elements(mesh) : 0, low = 0, across = 0;
+  double *q = calloc(ne + 1, sizeof *q);
+  if (mesh && r && q) {
+    double bound = HOC_PIPELINE_POOR * hoc_report_stage(r, 0)->stats.min;
+    CHECK_OK(hoc_mesh_measure(mesh, HOC_MEASURE_SHAPE, q, NULL, NULL));
+    hoc_pinch p[HOC_PINCHES];
+    int n = 0;
+    CHECK_OK(hoc_face_pinches(model, 0, HOC_PIPELINE_PINCH_SHARE, p,
+                              HOC_PINCHES, &n));
+    for (size_t e = 0; e < ne; ++e) {
+      if (!(q[e] < bound)) continue;
+      ++low;
+      across += (size_t)hoc_mesh_element_crosses_pinch(mesh, e, p, n);
+    }
+    int noted = 0;
+    for (size_t i = 0; i < hoc_report_num_findings(r); ++i) {
+      hoc_event_kind kind;
+      const char *text = hoc_report_finding(r, i, &kind);
+      noted += kind == HOC_EVENT_NOTE && strstr(text, "cross a pinch of their face") != NULL;
+    }
+    printf("pinched_sheet at order 5: %zu element(s) below %.4f, %zu across the pinch; "
+           "%d note(s)\n",
+           low, bound, across, noted);
+    CHECK(low > 0 && across == low && noted == 1);
+  }
+  free(q);
+  hoc_report_destroy(&r);
+  hoc_mesh_destroy(&mesh);
+  hoc_model_destroy(&model);
+}
+
+int main(void) {
+  test_analytic();
+  test_files();
+  test_note();
+  return test_report();
+}
