@@ -600,10 +600,10 @@ typedef struct hoc_mesh_options {
   int refinements;        /**< where elements stay tangled: at most this many remeshings of
                                their faces, and splits per chain (-1, the default: 2 for
                                hoc_mesh_model, 3 with a given linear mesh, 6 for
-                               hoc_mesh_repair; 0: none); where each face holding one
-                               folds (its normal reverses inside it) or has them all at
-                               CAD cusps, hoc_mesh_model makes neither, unless `linear`
-                               is given (then it splits) */
+                               hoc_mesh_repair; 0: none); on faces that fold (their normal
+                               reverses inside them) or at CAD cusps hoc_mesh_model makes
+                               one split per chain and no remeshing, and no split if
+                               each tangled element crosses a fold or is at a cusp */
   int keep_nodes;         /**< hoc_mesh_repair: optimise from the input's own high-order
                                nodes only, never from nodes re-placed from its corners */
   int equispaced;         /**< hoc_mesh_model: the result converted to equispaced nodes, what
@@ -644,12 +644,12 @@ typedef struct hoc_report hoc_report;
  *  as at a knot where a B-spline's derivative jumps), (3)
  *  optimised (hoc_mesh_optimize; unless options->optimize is 0; at order
  *  1 only if the linear mesh has tangled elements, which no split or
- *  remeshing follows). Where elements stay tangled on faces that fold or at
- *  CAD cusps only, which no finer mesh opens, they are left as they are
- *  (a repair event says so; with options->linear they are split, below).
- *  Elsewhere: first (below order 6) their split on
- *  a copy (as hoc_mesh_repair splits), kept if it leaves none tangled;
- *  else their faces meshed again with
+ *  remeshing follows). Where elements stay tangled: first (below order 6, or where
+ *  their faces fold or they have a corner at a CAD cusp) their split on a copy
+ *  (as hoc_mesh_repair splits), kept if it leaves none tangled (at folds and
+ *  cusps, which no finer mesh opens: the fewest tangled kept, no
+ *  remeshing, and no split where each element crosses a fold or is at a
+ *  cusp itself); else their faces meshed again with
  *  edges half as long and (unless options->size_min is set) a minimum
  *  size ten times smaller, unless that more than quadruples the mesh,
  *  and everything again, at

@@ -1,15 +1,17 @@
 /* hocad mesh, rule 4: elements left tangled at a cusp of the CAD are
- * neither split nor meshed again finer. At a corner where two curves meet under
+ * split, never meshed again finer. At a corner where two curves meet under
  * 2 degrees the curved element keeps the cusp's angle at every size, and
  * the gap between the two curves narrows to nothing, so the elements next
  * to such a corner element bridge it at every size too
  * (hoc_mesh_elements_at_cusps; those farther along the gap do not count).
  *
  * crescent_plate.step at order 4 with one sweep leaves 3 elements tangled,
- * each with a corner at one of its two cusps: the repair leaves them, with
- * no split and no remeshing (meshing the faces again twice, as for
- * elements a finer mesh may open, gives 8 and 6 tangled and takes ten
- * times as long). The warning names the cusps.
+ * each with a corner at one of its two cusps: the repair neither splits
+ * them (each is at a cusp itself: HOC_UNREFINABLE_EACH) nor meshes the
+ * faces again (which, as for elements a finer mesh may open, gives 8 and
+ * 6 tangled and takes ten times as long). The warning names the cusps.
+ * occt_bottle.brep at order 3 leaves one element tangled next to a fold
+ * of its face 4, not across it: one split opens it, no remeshing.
  * gear_f360.step at order 5 with one sweep has tangled elements away from
  * any cusp: a finer mesh may serve those, and hoc_repair_tangled_unrefinable
  * says so (no repair runs there).
@@ -154,6 +156,31 @@ static void test_elements_at_cusps(void) {
   hoc_model_destroy(&model);
 }
 
+/* occt_bottle.brep at order 3: its face 4 folds along its boundary (the
+ * thread's end curls over within the model's tolerance), and the one
+ * element the optimisation leaves tangled there is next to the fold, not
+ * across it: the split opens it (HOC_UNREFINABLE_EACH unset). */
+static void test_split_next_to_fold(void) {
+  hoc_model *model = NULL;
+  CHECK_OK(hoc_model_open(HOC_MODELS_DIR "/occt_bottle.brep", &model));
+  if (!model) return;
+  hoc_run run = {0};
+  hoc_mesh_options_default(&run.o);
+  run.o.order = 3;
+  hoc_mesh *mesh = NULL;
+  hoc_report *r = NULL;
+  CHECK_OK(hoc_mesh_model(model, &run.o, &mesh, &r));
+  if (r) {
+    printf("occt_bottle, order 3: %zu tangled, %d refinement(s), %d remeshing(s)\n",
+           hoc_report_tangled(r), hoc_report_refinements(r), hoc_report_remeshings(r));
+    CHECK(hoc_report_tangled(r) == 0 && hoc_report_refinements(r) >= 1);
+    CHECK(hoc_report_remeshings(r) == 0);
+  }
+  hoc_report_destroy(&r);
+  hoc_mesh_destroy(&mesh);
+  hoc_model_destroy(&model);
+}
+
 int main(void) {
   test_elements_at_cusps();
   seen s = {0};
@@ -166,9 +193,9 @@ int main(void) {
            hoc_report_tangled(r), at_cusp, hoc_report_refinements(r),
            hoc_report_remeshings(r), why);
     CHECK(hoc_report_tangled(r) > 0 && at_cusp == hoc_report_tangled(r));
-    CHECK(why == HOC_UNREFINABLE_CUSPS && s.at_cusps == 1);
+    CHECK(why == (HOC_UNREFINABLE_CUSPS | HOC_UNREFINABLE_EACH) && s.at_cusps == 1);
     CHECK(hoc_report_remeshings(r) == 0 && s.remeshed == 0);
-    CHECK(hoc_report_refinements(r) == 0);
+    CHECK(hoc_report_refinements(r) == 0); /* each at a cusp itself: no split */
     int named = 0; /* the warning says where they are */
     for (size_t i = 0; i < hoc_report_num_findings(r); ++i) {
       hoc_event_kind kind = HOC_EVENT_NOTE;
@@ -178,6 +205,8 @@ int main(void) {
     CHECK(named == 1);
   }
   hoc_report_destroy(&r);
+
+  test_split_next_to_fold();
 
   seen t = {0};
   r = one_sweep(HOC_MODELS_DIR "/gear_f360.step", 5, 0, &t, &why, &at_cusp);

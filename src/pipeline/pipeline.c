@@ -530,25 +530,20 @@ static hoc_status mesh_model_run(hoc_run *run, hoc_model *model, model_meshes *m
         o->refinements < 1)
       break;
     hoc_run_start_repairs(run, hoc_now() - t_start);
-    /* tangled elements no finer mesh opens (on folds, at cusps), where
-     * remeshing is not spent: neither split nor remeshed (a given linear
-     * mesh has no remeshing, and its splits are what it asks for).
-     * Otherwise first the local repair, on a copy:
-     * splitting the tangled elements (as below, once remeshing is spent)
-     * keeps the rest of the mesh; it is kept if it leaves none tangled (the
-     * bottle at order 2: two elements at its thread's end, which two
-     * remeshings only make worse). From HOC_PIPELINE_REMESH_FIRST_FROM on,
-     * the remeshing comes first */
+    /* first the local repair, on a copy: splitting the tangled elements
+     * (as below, once remeshing is spent) keeps the rest of the mesh; it
+     * is kept if it leaves none tangled (the bottle at order 2: two
+     * elements at its thread's end, which two remeshings only make worse).
+     * From HOC_PIPELINE_REMESH_FIRST_FROM on, the remeshing comes first
+     * unless no finer mesh opens the elements (see there) */
     int split_done = 0, unrefinable = 0, spent = o->linear || r->remeshings >= o->refinements;
-    if (!spent && !hoc_run_late(run))
+    if (!spent && !hoc_run_late(run)) {
       HOC_TRY_GOTO(hoc_repair_tangled_unrefinable(run, m->ho, &unrefinable), done);
-    if (unrefinable) {
-      HOC_TRY_GOTO(hoc_repair_unrefinable_note(run, unrefinable), done);
-      spent = 1;
-    } else if (!spent && !hoc_run_late(run) && o->order < HOC_PIPELINE_REMESH_FIRST_FROM) {
-      status = hoc_repair_split_first(run, r, &m->ho, &split_done);
-      *final = m->ho;
-      if (status != HOC_OK || split_done) break;
+      if (unrefinable || o->order < HOC_PIPELINE_REMESH_FIRST_FROM) {
+        status = hoc_repair_split_first(run, r, &m->ho, unrefinable, &split_done);
+        *final = m->ho;
+        if (status != HOC_OK || split_done) break;
+      }
     }
     if (spent || hoc_run_late(run)) {
       size_t now_tangled = hoc_stages_last(r)->stage.stats.tangled;
@@ -559,15 +554,14 @@ static hoc_status mesh_model_run(hoc_run *run, hoc_model *model, model_meshes *m
                                    "after %d remeshing(s) (%zu): %s that one",
                                    now_tangled, kept_r.remeshings,
                                    hoc_stages_last(&kept_r)->stage.stats.tangled,
-                                   hoc_run_late(run) || unrefinable ? "keeping" : "going on from"),
+                                   hoc_run_late(run) ? "keeping" : "going on from"),
                      done);
         move_meshes(attempt, kept);
         *r = kept_r;
         r->refinements = made;
         r->remeshings = remade;
       }
-      if (!hoc_run_late(run) && !unrefinable)
-        status = hoc_repair_refine_tangled(run, r, 2, &m->ho, NULL, 0);
+      if (!hoc_run_late(run)) status = hoc_repair_refine_tangled(run, r, 2, &m->ho, NULL, 0);
       *final = m->ho;
       break;
     }

@@ -28,8 +28,8 @@
  * each followed by a high-order optimisation that tests every step
  * exactly: bench/pinch_models.py's crescent_plate at order 10 keeps 5
  * elements tangled at its cusps through two splits (372 s after a first
- * optimised mesh of 86 s, were it split: hoc_repair_unrefinable_note) and
- * two remeshings from 824 elements to 11 586. The growth is the remeshing's
+ * optimised mesh of 86 s, were it split: HOC_UNREFINABLE_EACH) and two
+ * remeshings from 824 elements to 11 586. The growth is the remeshing's
  * (HOC_PIPELINE_REMESH_GROWTH): one remeshing may quadruple the mesh. */
 #define HOC_PIPELINE_REPAIR_GROWTH HOC_PIPELINE_REMESH_GROWTH
 #define HOC_PIPELINE_REPAIR_SECONDS 60
@@ -129,6 +129,13 @@
  * default Frontal-Delaunay, 0 with MeshAdapt, 4 with Delaunay). */
 #define HOC_PIPELINE_LINEAR_ALGORITHMS                                                             \
   { HOC_GMSH_MESH_ADAPT, HOC_GMSH_DELAUNAY }
+
+/* Splits per chain where no finer mesh opens the tangled elements and
+ * some of them neither cross a fold nor are at a cusp
+ * (hoc_repair_tangled_unrefinable): a split adds elements across a fold
+ * (surf114.igs, its inverted linear elements split: 29, 67, 148), and each
+ * split's optimisation keeps the ones across it tangled to its last sweep. */
+#define HOC_PIPELINE_FOLD_SPLITS 1
 
 /* The most stages one attempt has: linear, high-order, split, optimized,
  * smoothed, written (hoc_mesh_repair: input, re-placed or split, optimized). */
@@ -239,17 +246,12 @@ hoc_status hoc_repair_refine_tangled(const hoc_run *run, hoc_stages *r, int n_ke
                                      const hoc_mesh *start, int trial);
 
 /* hoc_repair_refine_tangled on a copy of *ho, kept (*done = 1) only if it
- * leaves no element tangled (or, once the run is late, fewer). */
-hoc_status hoc_repair_split_first(const hoc_run *run, hoc_stages *r, hoc_mesh **ho, int *done);
-
-/* The event that says why tangled elements are left as they are:
- * unrefinable is hoc_repair_tangled_unrefinable's nonzero answer. A split
- * adds elements across a fold (surf114.igs, its inverted linear elements
- * split: 29, 67, 148) or keeps a cusp's angle in the child at its corner,
- * and each split's optimisation keeps them tangled to its last sweep: on
- * surf114.igs at orders 2, 3 and 5 and on crescent_plate at order 10 no
- * split left fewer tangled, and they took 3, 9, 54 and 372 s. */
-hoc_status hoc_repair_unrefinable_note(const hoc_run *run, int unrefinable);
+ * leaves no element tangled; with unrefinable (hoc_repair_tangled_unrefinable's
+ * nonzero answer, named in the event), at most HOC_PIPELINE_FOLD_SPLITS splits
+ * per chain, kept if they leave fewer tangled than *ho has, and *done = 1
+ * either way; none with HOC_UNREFINABLE_EACH. */
+hoc_status hoc_repair_split_first(const hoc_run *run, hoc_stages *r, hoc_mesh **ho, int unrefinable,
+                                  int *done);
 
 /* Inverted linear triangles: gmsh's mesh of some B-spline faces has
  * straight triangles whose normal turns against the face's at a corner
@@ -277,9 +279,14 @@ hoc_status hoc_repair_linear(const hoc_run *run, hoc_model *model, const hoc_lin
  *   The curved corner keeps the cusp's angle at every size, and the gap
  *   narrows to nothing (bench/pinch_models.py's crescent_plate at order 4
  *   with one sweep: 3 tangled at its cusps; remeshing gives 8, then 6).
- * Their elements are neither split nor meshed again finer
- * (hoc_repair_unrefinable_note). */
-enum { HOC_UNREFINABLE_FOLDS = 1, HOC_UNREFINABLE_CUSPS = 2 };
+ * These faces are never meshed again finer. HOC_UNREFINABLE_EACH is set
+ * too where each tangled element itself crosses a fold or is at a cusp:
+ * those are not split either (crescent_plate at order 10: a split per
+ * chain took 372 s and left the same 5 tangled; surf114.igs at order 5:
+ * 54 s, no fewer). A split serves the others: the element next to a fold
+ * at the bottle's thread (face 4 of occt_bottle.brep, whose boundary
+ * curls over) untangles when split. */
+enum { HOC_UNREFINABLE_FOLDS = 1, HOC_UNREFINABLE_CUSPS = 2, HOC_UNREFINABLE_EACH = 4 };
 hoc_status hoc_repair_tangled_unrefinable(const hoc_run *run, const hoc_mesh *mesh, int *why);
 
 /* The faces of the tangled elements of ho (made from lin) get an edge

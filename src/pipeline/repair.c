@@ -239,34 +239,69 @@ hoc_status hoc_repair_refine_tangled(const hoc_run *run, hoc_stages *r, int n_ke
   return status;
 }
 
-hoc_status hoc_repair_unrefinable_note(const hoc_run *run, int unrefinable) {
+hoc_status hoc_repair_split_first(const hoc_run *run, hoc_stages *r, hoc_mesh **ho, int unrefinable,
+                                  int *done) {
+  *done = 0;
+  int keep_fewest = unrefinable != 0;
   int folds = unrefinable & HOC_UNREFINABLE_FOLDS, cusps = unrefinable & HOC_UNREFINABLE_CUSPS;
   char at_cusps[80] = "";
   if (cusps)
     snprintf(at_cusps, sizeof at_cusps,
              "at cusps of the CAD (two curves meeting under %g degrees)",
              HOC_PIPELINE_CUSP_DEGREES);
-  return hoc_run_event(run, HOC_EVENT_REPAIR,
-                       "the tangled elements are %s%s%s, %s: neither splitting them nor meshing "
-                       "the faces again opens them, the optimised mesh is kept",
-                       folds ? "on faces that fold (their normal reverses inside them)" : "",
-                       folds && cusps ? " or " : "", at_cusps,
-                       !cusps  ? "which a finer mesh crosses with more elements"
-                       : folds ? "which a finer mesh crosses with more elements or meets at the "
-                                 "same angle"
-                               : "whose angle a finer mesh keeps");
-}
-
-hoc_status hoc_repair_split_first(const hoc_run *run, hoc_stages *r, hoc_mesh **ho, int *done) {
-  *done = 0;
+  char where[256];
+  snprintf(where, sizeof where, "%s%s%s, %s",
+           folds ? "on faces that fold (their normal reverses inside them)" : "",
+           folds && cusps ? " or " : "", at_cusps,
+           !cusps  ? "which a finer mesh crosses with more elements"
+           : folds ? "which a finer mesh crosses with more elements or meets at the same angle"
+                   : "whose angle a finer mesh keeps");
+  if (unrefinable & HOC_UNREFINABLE_EACH) {
+    *done = 1;
+    return hoc_run_event(run, HOC_EVENT_REPAIR,
+                         "the tangled elements are %s, and each crosses a fold or has a corner "
+                         "at a cusp itself: neither split nor meshed again (the optimised mesh "
+                         "is kept)",
+                         where);
+  }
   hoc_mesh *copy = NULL;
   HOC_TRY(hoc_mesh_copy(*ho, &copy));
   hoc_stages trial = *r;
-  hoc_status status = hoc_run_event(run, HOC_EVENT_REPAIR,
-                                    "splitting the tangled elements first (kept if that leaves "
-                                    "none tangled)");
-  if (status == HOC_OK) status = hoc_repair_refine_tangled(run, &trial, 2, &copy, NULL, 1);
+  hoc_status status =
+      keep_fewest
+          ? hoc_run_event(run, HOC_EVENT_REPAIR,
+                          "the tangled elements are %s: at most %d split(s) per chain instead "
+                          "of meshing the faces again (the result with the fewest tangled is "
+                          "kept)",
+                          where, HOC_PIPELINE_FOLD_SPLITS)
+          : hoc_run_event(run, HOC_EVENT_REPAIR,
+                          "splitting the tangled elements first (kept if that leaves none "
+                          "tangled)");
+  hoc_run fold_run = *run;
+  if (keep_fewest && fold_run.o.refinements > HOC_PIPELINE_FOLD_SPLITS)
+    fold_run.o.refinements = HOC_PIPELINE_FOLD_SPLITS;
+  if (status == HOC_OK) status = hoc_repair_refine_tangled(&fold_run, &trial, 2, &copy, NULL, 1);
   size_t left = status != HOC_OK ? 0 : hoc_stages_last(&trial)->stage.stats.tangled;
+  if (status == HOC_OK && keep_fewest) {
+    int made = trial.refinements;
+    size_t before = hoc_stages_last(r)->stage.stats.tangled;
+    if (left < before) {
+      hoc_mesh_destroy(ho);
+      *ho = copy;
+      *r = trial;
+    } else {
+      hoc_mesh_destroy(&copy);
+      r->refinements = made;
+    }
+    *done = 1;
+    return left < before ? hoc_run_event(run, HOC_EVENT_NOTE,
+                                         "kept the mesh of refinement %d, which has the fewest "
+                                         "tangled elements (%zu)",
+                                         made, left)
+                         : hoc_run_event(run, HOC_EVENT_NOTE,
+                                         "splitting left no fewer tangled elements: kept the "
+                                         "mesh before it");
+  }
   if (status == HOC_OK && !left) {
     hoc_mesh_destroy(ho);
     *ho = copy;
@@ -656,11 +691,14 @@ hoc_status hoc_repair_tangled_unrefinable(const hoc_run *run, const hoc_mesh *me
   HOC_TRY_GOTO(hoc_mesh_measure(mesh, run->o.measure, NULL, tangled, NULL), done);
   HOC_TRY_GOTO(hoc_mesh_elements_at_cusps(mesh, HOC_PIPELINE_CUSP_DEGREES, tangled, at_cusp),
                done);
-  int any = 0;
+  int any = 0, each = 1; /* each tangled element across a fold or at a cusp itself */
   for (size_t e = 0; e < ne; ++e) {
     if (!tangled[e]) continue;
     any = 1;
     state[mesh->elem_face[e]] |= TANGLED | (at_cusp[e] ? 0 : OFF_CUSP);
+    int folds = 0;
+    if (each && !at_cusp[e]) HOC_TRY_GOTO(hoc_mesh_element_folds(mesh, e, &folds), done);
+    each = each && (at_cusp[e] || folds);
   }
   for (size_t e = 0; e < ne; ++e) {
     int f = mesh->elem_face[e], folds = 0;
@@ -678,7 +716,7 @@ hoc_status hoc_repair_tangled_unrefinable(const hoc_run *run, const hoc_mesh *me
     else
       any = 0; /* a face a finer mesh may serve */
   }
-  *why = any ? kinds : 0;
+  *why = any ? kinds | (each ? HOC_UNREFINABLE_EACH : 0) : 0;
 done:
   free(tangled);
   free(state);
