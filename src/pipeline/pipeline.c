@@ -627,7 +627,7 @@ hoc_status hoc_mesh_model(hoc_model *model, const hoc_mesh_options *options, hoc
   if (status == HOC_OK) status = hoc_report_create("mesh", run.o.measure, &rep);
   if (status == HOC_OK) {
     int find = HOC_FIND_TANGLED | HOC_FIND_FROM_CAD;
-    if (run.o.optimize && run.o.order > 1) find |= HOC_FIND_CUSPS;
+    if (run.o.optimize && run.o.order > 1) find |= HOC_FIND_POOR;
     rep->failed_faces = hoc_mesh_num_failed_faces(m.lin);
     status = hoc_report_finish(rep, &r, final, find, t0);
   }

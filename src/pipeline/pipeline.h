@@ -310,7 +310,7 @@ typedef enum hoc_findings {
   HOC_FIND_NOTHING = 0,  /* hocad quality: the stages only */
   HOC_FIND_TANGLED = 1,  /* tangled elements, and why */
   HOC_FIND_FROM_CAD = 2, /* with TANGLED: a finer linear mesh is possible (the advice says so) */
-  HOC_FIND_CUSPS = 4     /* elements at a CAD cusp below 0.9 x the linear mesh's min q */
+  HOC_FIND_POOR = 4      /* elements below 0.9 x the linear mesh's min q at a CAD cusp or a pinch */
 } hoc_findings;
 
 /* Fill the report with the stages r of the result `final`: its size, its q

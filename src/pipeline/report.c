@@ -266,7 +266,7 @@ static hoc_status face_pinches(const hoc_mesh *mesh, int f, hoc_pinch (*pinch)[H
  * cusp, cross a pinch of their face (hoc_face_pinches: the curved element
  * passes through the pinch's point): say so, and what the rest of the mesh
  * reaches. */
-static hoc_status find_cusps(hoc_report *report, const hoc_stages *r, const hoc_mesh *mesh,
+static hoc_status find_poor(hoc_report *report, const hoc_stages *r, const hoc_mesh *mesh,
                              const double *q) {
   double bound = HOC_PIPELINE_POOR * r->s[0].stage.stats.min;
   double rest = 1, neither = 1; /* q <= 1: at no cusp; at no cusp and across no pinch */
@@ -352,7 +352,7 @@ hoc_status hoc_report_finish(hoc_report *report, const hoc_stages *r, const hoc_
   if (findings & HOC_FIND_TANGLED)
     HOC_TRY(find_tangled(report, final, report->quality, optimized_stage(r),
                          !!(findings & HOC_FIND_FROM_CAD)));
-  if (findings & HOC_FIND_CUSPS) HOC_TRY(find_cusps(report, r, final, report->quality));
+  if (findings & HOC_FIND_POOR) HOC_TRY(find_poor(report, r, final, report->quality));
   report->seconds = hoc_now() - t0;
   return HOC_OK;
 }
