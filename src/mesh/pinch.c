@@ -38,8 +38,7 @@ static hoc_status spread(const hoc_model *model, int f, int dir, double c, doubl
 hoc_status hoc_face_pinches(const hoc_model *model, int f, double share, hoc_pinch *pinch, int max,
                            int *n) {
   HOC_CHECK(model && pinch && n && f >= 0 && f < model->n_faces && max > 0 && share > 0,
-            HOC_ERR_ARGUMENT,
-            "pinch search: bad argument");
+            HOC_ERR_ARGUMENT, "pinch search: bad argument");
   *n = 0;
   const hoc_cad_face *face = &model->faces[f];
   double size = 0;
@@ -52,7 +51,9 @@ hoc_status hoc_face_pinches(const hoc_model *model, int f, double share, hoc_pin
     for (int i = 0; i <= LINES; ++i)
       HOC_TRY(spread(model, f, dir, lo + i * h, &s[i]));
     for (int i = 1; i < LINES && *n < max; ++i) {
-      if (!(s[i] <= s[i - 1] && s[i] <= s[i + 1])) continue;
+      /* a minimum, not a plateau (a cylinder's lines all spread alike) */
+      if (!(s[i] <= s[i - 1] && s[i] <= s[i + 1] && (s[i] < s[i - 1] || s[i] < s[i + 1])))
+        continue;
       /* the narrowest line between the neighbouring probes */
       const double g = 0.5 * (sqrt(5.0) - 1);
       double a = lo + (i - 1) * h, b = lo + (i + 1) * h;
