@@ -10,6 +10,10 @@
  *   spreads 0.003 of the face's 90.
  * - pinched_sheet at order 5: elements end below 0.9 x the linear mesh's
  *   min q, every one of them across the pinch, and the note says so.
+ * - A tangled element across the sheet's pinch (one of its linear mesh's,
+ *   turned over) is one no split or finer mesh opens: its face is
+ *   HOC_UNREFINABLE_PINCHES, and, the only one tangled, it is EACH; the
+ *   same element turned over away from the pinch is neither.
  * SPDX-License-Identifier: GPL-2.0-or-later */
 #include "hocad.h"
 #include "mesh/mesh.h"
@@ -106,9 +110,56 @@ static void test_note(void) {
   hoc_model_destroy(&model);
 }
 
+/* Turn element e of an order-1 mesh over: swap its corners 1 and 2. */
+static void turn_over(hoc_mesh *m, size_t e) {
+  size_t *c = m->conn + 3 * e, *s = m->elem_slot + 3 * e, t = c[1];
+  double *uv = m->elem_uv + 6 * e;
+  c[1] = c[2], c[2] = t;
+  t = s[1], s[1] = s[2], s[2] = t;
+  for (int d = 0; d < 2; ++d) {
+    double x = uv[2 + d];
+    uv[2 + d] = uv[4 + d], uv[4 + d] = x;
+  }
+}
+
+static void test_unrefinable(void) {
+  hoc_model *model = NULL;
+  CHECK_OK(hoc_model_open(DATA "pinched_sheet.step", &model));
+  if (!model) return;
+  hoc_run run = {0};
+  hoc_mesh_options_default(&run.o);
+  hoc_linear_options lo;
+  memset(&lo, 0, sizeof lo);
+  lo.order = 1;
+  hoc_pinch p[HOC_PINCHES];
+  int n = 0;
+  CHECK_OK(hoc_face_pinches(model, 0, HOC_PIPELINE_PINCH_SHARE, p, HOC_PINCHES, &n));
+  for (int across = 1; across >= 0; --across) {
+    hoc_mesh *lin = NULL;
+    CHECK_OK(hoc_mesh_generate_linear(model, &lo, &lin));
+    if (!lin) break;
+    size_t ne = hoc_mesh_num_elements(lin), e = 0;
+    while (e < ne && hoc_mesh_element_crosses_pinch(lin, e, p, n) != across) ++e;
+    int why = -1;
+    if (e < ne) {
+      turn_over(lin, e);
+      CHECK_OK(hoc_repair_tangled_unrefinable(&run, lin, &why));
+    }
+    printf("pinched_sheet, element %zu of %zu (%s the pinch) turned over: unrefinable %d\n",
+           e + 1, ne, across ? "across" : "away from", why);
+    if (across)
+      CHECK(why == (HOC_UNREFINABLE_PINCHES | HOC_UNREFINABLE_EACH));
+    else
+      CHECK(e < ne && why == 0);
+    hoc_mesh_destroy(&lin);
+  }
+  hoc_model_destroy(&model);
+}
+
 int main(void) {
   test_analytic();
   test_files();
   test_note();
+  test_unrefinable();
   return test_report();
 }

@@ -345,6 +345,24 @@ hoc_status hoc_face_pinches(const hoc_model *model, int f, double share, hoc_pin
 int hoc_mesh_element_crosses_pinch(const hoc_mesh *mesh, size_t e, const hoc_pinch *pinch,
                                    int n);
 
+/** The pinches of a model's faces, searched on first use (each face's at
+ *  most once): hoc_face_pinches with `share` and up to `max` per face. */
+typedef struct hoc_pinch_table {
+  double share;
+  int max;
+  int *n;          /* [n_faces] pinches found, -1: not searched yet */
+  hoc_pinch *line; /* [n_faces][max] */
+} hoc_pinch_table;
+
+hoc_status hoc_pinch_table_init(hoc_pinch_table *t, const hoc_model *model, double share,
+                                int max);
+void hoc_pinch_table_free(hoc_pinch_table *t);
+
+/** *across: whether element e crosses a pinch of its face (the face
+ *  searched through table t if not yet). */
+hoc_status hoc_mesh_element_across_pinch(const hoc_mesh *mesh, size_t e, hoc_pinch_table *t,
+                                         int *across);
+
 /** Why an order-1 element the measure finds tangled is (mesh/inverted.c). */
 typedef enum hoc_inverted_kind {
   HOC_INVERTED_NONE = 0,        /* not tangled */

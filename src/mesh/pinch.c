@@ -12,6 +12,7 @@
 #include "mesh/mesh.h"
 
 #include <math.h>
+#include <stdlib.h>
 
 /* Iso-lines probed across each direction, points along each, and golden
  * section steps that find the narrowest line near each probed minimum. */
@@ -101,4 +102,38 @@ int hoc_mesh_element_crosses_pinch(const hoc_mesh *mesh, size_t e, const hoc_pin
     }
   }
   return 0;
+}
+
+hoc_status hoc_pinch_table_init(hoc_pinch_table *t, const hoc_model *model, double share,
+                                int max) {
+  HOC_CHECK(t && model && share > 0 && max > 0, HOC_ERR_ARGUMENT, "pinch table: bad argument");
+  size_t nf = (size_t)model->n_faces;
+  t->share = share;
+  t->max = max;
+  t->n = hoc_calloc(nf + 1, sizeof *t->n);
+  t->line = hoc_calloc(nf * (size_t)max + 1, sizeof *t->line);
+  if (!t->n || !t->line) {
+    hoc_pinch_table_free(t);
+    return HOC_ERROR(HOC_ERR_MEMORY, "out of memory");
+  }
+  for (size_t f = 0; f < nf; ++f)
+    t->n[f] = -1;
+  return HOC_OK;
+}
+
+void hoc_pinch_table_free(hoc_pinch_table *t) {
+  if (!t) return;
+  free(t->n);
+  free(t->line);
+  t->n = NULL;
+  t->line = NULL;
+}
+
+hoc_status hoc_mesh_element_across_pinch(const hoc_mesh *mesh, size_t e, hoc_pinch_table *t,
+                                         int *across) {
+  int f = mesh->elem_face[e];
+  hoc_pinch *line = t->line + (size_t)f * (size_t)t->max;
+  if (t->n[f] < 0) HOC_TRY(hoc_face_pinches(mesh->model, f, t->share, line, t->max, &t->n[f]));
+  *across = hoc_mesh_element_crosses_pinch(mesh, e, line, t->n[f]);
+  return HOC_OK;
 }

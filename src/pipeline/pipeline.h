@@ -267,12 +267,17 @@ hoc_status hoc_repair_linear(const hoc_run *run, hoc_model *model, const hoc_lin
                              hoc_mesh **lin);
 
 /* Where a finer mesh cannot open the tangled elements, *why says why
- * (HOC_UNREFINABLE_FOLDS | HOC_UNREFINABLE_CUSPS), else it is 0: mesh has
+ * (HOC_UNREFINABLE_FOLDS | _CUSPS | _PINCHES), else it is 0: mesh has
  * tangled elements, and every face holding one
  * - folds (an element of it crosses a fold: hoc_mesh_element_folds). A
  *   finer mesh crosses the fold with more elements (surf114.igs: 26 linear
  *   elements across folds of faces 1, 3 and 4; splitting the inverted ones
  *   twice makes 148);
+ * - or has a tangled element across a pinch of the face (hoc_face_pinches:
+ *   a line of its (u, v) that maps to one point). A split's children cross
+ *   the line again, and a finer mesh crosses it with more elements: only
+ *   nodes on the line avoid them (surf114.igs at order 3: 11 tangled, each
+ *   across a pinch, 10 of them across a fold too);
  * - or has all its tangled elements at a CAD cusp, where two curves meet
  *   under HOC_PIPELINE_CUSP_DEGREES (hoc_mesh_elements_at_cusps: a corner
  *   there, or next to such an element across the gap between the curves).
@@ -280,13 +285,19 @@ hoc_status hoc_repair_linear(const hoc_run *run, hoc_model *model, const hoc_lin
  *   narrows to nothing (bench/pinch_models.py's crescent_plate at order 4
  *   with one sweep: 3 tangled at its cusps; remeshing gives 8, then 6).
  * These faces are never meshed again finer. HOC_UNREFINABLE_EACH is set
- * too where each tangled element itself crosses a fold or is at a cusp:
+ * too where each tangled element itself crosses a fold or a pinch, or is
+ * at a cusp:
  * those are not split either (crescent_plate at order 10: a split per
  * chain took 372 s and left the same 5 tangled; surf114.igs at order 5:
  * 54 s, no fewer). A split serves the others: the element next to a fold
  * at the bottle's thread (face 4 of occt_bottle.brep, whose boundary
  * curls over) untangles when split. */
-enum { HOC_UNREFINABLE_FOLDS = 1, HOC_UNREFINABLE_CUSPS = 2, HOC_UNREFINABLE_EACH = 4 };
+enum {
+  HOC_UNREFINABLE_FOLDS = 1,
+  HOC_UNREFINABLE_CUSPS = 2,
+  HOC_UNREFINABLE_EACH = 4,
+  HOC_UNREFINABLE_PINCHES = 8
+};
 hoc_status hoc_repair_tangled_unrefinable(const hoc_run *run, const hoc_mesh *mesh, int *why);
 
 /* The faces of the tangled elements of ho (made from lin) get an edge

@@ -243,15 +243,21 @@ hoc_status hoc_repair_split_first(const hoc_run *run, hoc_stages *r, hoc_mesh **
                                   int *done) {
   *done = 0;
   int keep_fewest = unrefinable != 0;
-  int folds = unrefinable & HOC_UNREFINABLE_FOLDS, cusps = unrefinable & HOC_UNREFINABLE_CUSPS;
+  int folds = unrefinable & (HOC_UNREFINABLE_FOLDS | HOC_UNREFINABLE_PINCHES),
+      cusps = unrefinable & HOC_UNREFINABLE_CUSPS;
   char at_cusps[80] = "";
   if (cusps)
     snprintf(at_cusps, sizeof at_cusps,
              "at cusps of the CAD (two curves meeting under %g degrees)",
              HOC_PIPELINE_CUSP_DEGREES);
-  char where[256];
-  snprintf(where, sizeof where, "%s%s%s, %s",
-           folds ? "on faces that fold (their normal reverses inside them)" : "",
+  const char *across = (unrefinable & HOC_UNREFINABLE_PINCHES)
+                           ? (unrefinable & HOC_UNREFINABLE_FOLDS)
+                                 ? "on faces that fold (their normal reverses inside them) or "
+                                   "pinch (a line of their (u, v) maps to one point)"
+                                 : "on faces that pinch (a line of their (u, v) maps to one point)"
+                           : "on faces that fold (their normal reverses inside them)";
+  char where[320];
+  snprintf(where, sizeof where, "%s%s%s, %s", folds ? across : "",
            folds && cusps ? " or " : "", at_cusps,
            !cusps  ? "which a finer mesh crosses with more elements"
            : folds ? "which a finer mesh crosses with more elements or meets at the same angle"
@@ -259,9 +265,9 @@ hoc_status hoc_repair_split_first(const hoc_run *run, hoc_stages *r, hoc_mesh **
   if (unrefinable & HOC_UNREFINABLE_EACH) {
     *done = 1;
     return hoc_run_event(run, HOC_EVENT_REPAIR,
-                         "the tangled elements are %s, and each crosses a fold or has a corner "
-                         "at a cusp itself: neither split nor meshed again (the optimised mesh "
-                         "is kept)",
+                         "the tangled elements are %s, and each crosses a fold or a pinch or "
+                         "has a corner at a cusp itself: neither split nor meshed again (the "
+                         "optimised mesh is kept)",
                          where);
   }
   hoc_mesh *copy = NULL;
@@ -679,26 +685,32 @@ done:
 }
 
 hoc_status hoc_repair_tangled_unrefinable(const hoc_run *run, const hoc_mesh *mesh, int *why) {
-  enum { TANGLED = 1, FOLDS = 2, OFF_CUSP = 4 }; /* per face */
+  enum { TANGLED = 1, FOLDS = 2, OFF_CUSP = 4, PINCHED = 8 }; /* per face */
   *why = 0;
   size_t ne = hoc_mesh_num_elements(mesh);
   int nf = mesh->model->n_faces;
   unsigned char *tangled = NULL, *state = NULL, *at_cusp = NULL;
+  hoc_pinch_table pinches = {0};
   hoc_status status = HOC_OK;
   HOC_ALLOC_GOTO(tangled, ne, done);
   HOC_ALLOC_GOTO(at_cusp, ne + 1, done);
   HOC_ALLOC_GOTO(state, (size_t)nf + 1, done);
+  HOC_TRY_GOTO(
+      hoc_pinch_table_init(&pinches, mesh->model, HOC_PIPELINE_PINCH_SHARE, HOC_PINCHES), done);
   HOC_TRY_GOTO(hoc_mesh_measure(mesh, run->o.measure, NULL, tangled, NULL), done);
   HOC_TRY_GOTO(hoc_mesh_elements_at_cusps(mesh, HOC_PIPELINE_CUSP_DEGREES, tangled, at_cusp),
                done);
-  int any = 0, each = 1; /* each tangled element across a fold or at a cusp itself */
+  int any = 0, each = 1; /* each tangled element across a fold or a pinch, or at a cusp */
   for (size_t e = 0; e < ne; ++e) {
     if (!tangled[e]) continue;
     any = 1;
-    state[mesh->elem_face[e]] |= TANGLED | (at_cusp[e] ? 0 : OFF_CUSP);
-    int folds = 0;
-    if (each && !at_cusp[e]) HOC_TRY_GOTO(hoc_mesh_element_folds(mesh, e, &folds), done);
-    each = each && (at_cusp[e] || folds);
+    int f = mesh->elem_face[e], folds = 0, pinch = 0;
+    state[f] |= TANGLED | (at_cusp[e] ? 0 : OFF_CUSP);
+    if (at_cusp[e]) continue;
+    HOC_TRY_GOTO(hoc_mesh_element_across_pinch(mesh, e, &pinches, &pinch), done);
+    if (pinch) state[f] |= PINCHED;
+    if (each && !pinch) HOC_TRY_GOTO(hoc_mesh_element_folds(mesh, e, &folds), done);
+    each = each && (pinch || folds);
   }
   for (size_t e = 0; e < ne; ++e) {
     int f = mesh->elem_face[e], folds = 0;
@@ -709,8 +721,9 @@ hoc_status hoc_repair_tangled_unrefinable(const hoc_run *run, const hoc_mesh *me
   int kinds = 0;
   for (int f = 0; f < nf && any; ++f) {
     if (!(state[f] & TANGLED)) continue;
-    if (state[f] & FOLDS)
-      kinds |= HOC_UNREFINABLE_FOLDS;
+    if (state[f] & (FOLDS | PINCHED))
+      kinds |= (state[f] & FOLDS ? HOC_UNREFINABLE_FOLDS : 0) |
+               (state[f] & PINCHED ? HOC_UNREFINABLE_PINCHES : 0);
     else if (!(state[f] & OFF_CUSP))
       kinds |= HOC_UNREFINABLE_CUSPS;
     else
@@ -718,6 +731,7 @@ hoc_status hoc_repair_tangled_unrefinable(const hoc_run *run, const hoc_mesh *me
   }
   *why = any ? kinds | (each ? HOC_UNREFINABLE_EACH : 0) : 0;
 done:
+  hoc_pinch_table_free(&pinches);
   free(tangled);
   free(state);
   free(at_cusp);

@@ -180,30 +180,45 @@ static hoc_status find_tangled(hoc_report *report, const hoc_mesh *mesh, const d
     total += q[e] == 0.0;
   if (!total) return HOC_OK;
   /* elements across a fold of their face: no finer mesh of the same kind avoids those */
-  size_t across = 0, at_cusp = 0;
+  size_t across = 0, at_cusp = 0, pinched = 0, either = 0; /* either: a fold or a pinch */
   unsigned char *tangled = NULL, *cusp = NULL;
+  hoc_pinch_table pinches = {0};
   HOC_ALLOC(tangled, ne);
   hoc_status status = HOC_OK;
   HOC_ALLOC_GOTO(cusp, ne, done);
+  HOC_TRY_GOTO(
+      hoc_pinch_table_init(&pinches, mesh->model, HOC_PIPELINE_PINCH_SHARE, HOC_PINCHES), done);
   for (size_t e = 0; e < ne; ++e)
     tangled[e] = q[e] == 0.0;
   HOC_TRY_GOTO(hoc_mesh_elements_at_cusps(mesh, HOC_PIPELINE_CUSP_DEGREES, tangled, cusp), done);
   for (size_t e = 0; e < ne; ++e) {
-    int folds = 0;
+    int folds = 0, pinch = 0;
     if (q[e] != 0.0) continue;
-    if (hoc_mesh_element_folds(mesh, e, &folds) == HOC_OK) across += folds;
+    if (hoc_mesh_element_folds(mesh, e, &folds) != HOC_OK) folds = 0;
+    HOC_TRY_GOTO(hoc_mesh_element_across_pinch(mesh, e, &pinches, &pinch), done);
+    across += folds;
+    pinched += pinch;
+    either += folds || pinch;
     at_cusp += cusp[e];
   }
-  int all_across = opt && across == total; /* optimised, and every one across a fold */
-  int all_at_cusp = opt && at_cusp == total && !across;
+  /* optimised, and every one across a fold or a pinch of its face */
+  int all_across = opt && either == total;
+  int all_at_cusp = opt && at_cusp == total && !either;
   text t = {0};
   const hoc_stage *s = opt ? &opt->stage : NULL;
-  if (all_across)
+  if (all_across && !pinched)
     text_add(&t,
              "%zu element(s) tangled across a fold of their face, where its normal phi_u x "
              "phi_v reverses (the CAD face folds on itself; a mesh whose edges do not follow the "
              "fold crosses it, a finer one with more elements):",
              total);
+  else if (all_across)
+    text_add(&t,
+             "%zu element(s) tangled across a fold or a pinch of their face (%zu across a "
+             "pinch: a line of the face's (u, v) that the CAD maps to one point, which an "
+             "element across it passes through with its Jacobian vanishing there; only a mesh "
+             "with nodes on the line avoids them):",
+             total, pinched);
   else if (all_at_cusp)
     text_add(&t,
              "%zu element(s) tangled at a cusp of the CAD, where two of its curves meet under "
@@ -238,6 +253,11 @@ static hoc_status find_tangled(hoc_report *report, const hoc_mesh *mesh, const d
              "; %zu of them cross a fold of their face, where its normal phi_u x phi_v "
              "reverses, which a mesh whose edges do not follow it crosses",
              across);
+  if (pinched && !all_across)
+    text_add(&t,
+             "; %zu of them cross a pinch of their face (a line of its (u, v) that the CAD maps "
+             "to one point), which only a mesh with nodes on the line avoids",
+             pinched);
   if (at_cusp && !all_at_cusp)
     text_add(&t,
              "; %zu of them are at a cusp of the CAD (two curves meeting under %g degrees), "
@@ -245,18 +265,10 @@ static hoc_status find_tangled(hoc_report *report, const hoc_mesh *mesh, const d
              at_cusp, HOC_PIPELINE_CUSP_DEGREES);
   status = add_finding(report, HOC_EVENT_WARNING, &t);
 done:
+  hoc_pinch_table_free(&pinches);
   free(tangled);
   free(cusp);
   return status;
-}
-
-/* The pinches of face f, found on first use: n[f] < 0 until then. */
-static hoc_status face_pinches(const hoc_mesh *mesh, int f, hoc_pinch (*pinch)[HOC_PINCHES],
-                               int *n) {
-  if (n[f] < 0)
-    HOC_TRY(hoc_face_pinches(mesh->model, f, HOC_PIPELINE_PINCH_SHARE, pinch[f], HOC_PINCHES,
-                             &n[f]));
-  return HOC_OK;
 }
 
 /* Elements that end below 0.9 x the linear mesh's worst and have a corner at
@@ -271,23 +283,18 @@ static hoc_status find_poor(hoc_report *report, const hoc_stages *r, const hoc_m
   double bound = HOC_PIPELINE_POOR * r->s[0].stage.stats.min;
   double rest = 1, neither = 1; /* q <= 1: at no cusp; at no cusp and across no pinch */
   size_t ne = hoc_mesh_num_elements(mesh), low = 0, at_cusp = 0, at_pinch = 0;
-  int nf = hoc_model_num_faces(mesh->model);
   char list[512] = "", plist[512] = "";
   size_t len = 0, plen = 0;
   const hoc_stage_record *opt = optimized_stage(r);
   if (!opt || !opt->stage.converged) return HOC_OK; /* a low q may still be the optimiser's */
   if (r->n < 2 || !(r->s[r->n - 1].stage.stats.min < bound)) return HOC_OK; /* none below */
-  hoc_pinch(*pinch)[HOC_PINCHES] = NULL;
-  int *n_pinch = NULL;
+  hoc_pinch_table pinches = {0};
+  HOC_TRY(hoc_pinch_table_init(&pinches, mesh->model, HOC_PIPELINE_PINCH_SHARE, HOC_PINCHES));
   hoc_status status = HOC_OK;
-  HOC_ALLOC_GOTO(pinch, (size_t)nf + 1, done);
-  HOC_ALLOC_GOTO(n_pinch, (size_t)nf + 1, done);
-  for (int f = 0; f < nf; ++f)
-    n_pinch[f] = -1;
   for (size_t e = 0; e < ne; ++e) {
     if (q[e] == 0.0 || (q[e] >= bound && q[e] >= neither)) continue; /* changes nothing below */
     hoc_cusp c;
-    int found = 0, f = mesh->elem_face[e];
+    int found = 0;
     if (hoc_mesh_element_cusp(mesh, e, HOC_PIPELINE_CUSP_DEGREES, &c, &found) != HOC_OK) found = 0;
     if (found) {
       if (!(q[e] < bound)) continue;
@@ -300,8 +307,9 @@ static hoc_status find_poor(hoc_report *report, const hoc_stages *r, const hoc_m
       continue;
     }
     rest = fmin(rest, q[e]);
-    HOC_TRY_GOTO(face_pinches(mesh, f, pinch, n_pinch), done);
-    if (hoc_mesh_element_crosses_pinch(mesh, e, pinch[f], n_pinch[f])) {
+    int across = 0;
+    HOC_TRY_GOTO(hoc_mesh_element_across_pinch(mesh, e, &pinches, &across), done);
+    if (across) {
       if (!(q[e] < bound)) continue;
       ++low;
       if (++at_pinch <= 3 && plen < sizeof plist)
@@ -336,8 +344,7 @@ static hoc_status find_poor(hoc_report *report, const hoc_stages *r, const hoc_m
     HOC_TRY_GOTO(add_finding(report, HOC_EVENT_NOTE, &t), done);
   }
 done:
-  free(pinch);
-  free(n_pinch);
+  hoc_pinch_table_free(&pinches);
   return status;
 }
 
