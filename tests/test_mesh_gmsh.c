@@ -718,7 +718,41 @@ static void test_free_entities(void) {
   hoc_model_destroy(&model);
 }
 
+/* A face far smaller than the default minimum size (a sphere of radius
+ * 0.5 beside a box 1000 across: minimum 6.2) gets triangles: its curves
+ * had one segment at that minimum and gmsh left it empty; the mesh is made
+ * again with the minimum lowered to a quarter of the sphere's size. With
+ * --size-min 6.2 given, the user's minimum holds and the face fails. */
+static void test_small_face(void) {
+  hoc_model *model = NULL;
+  CHECK_OK(hoc_model_open(HOC_SOURCE_DIR "/tests/data/box_and_bead.brep", &model));
+  if (!model) return;
+  for (int given = 0; given < 2; ++given) {
+    hoc_linear_options o;
+    hoc_linear_options_default(&o);
+    if (given) o.size_min = model->diagonal / 200;
+    hoc_mesh *m = NULL;
+    CHECK_OK(hoc_mesh_generate_linear(model, &o, &m));
+    if (!m) continue;
+    size_t on_bead = 0;
+    for (size_t e = 0; e < m->n_elems; ++e)
+      on_bead += strcmp(model->faces[m->elem_face[e]].type, "Sphere") == 0;
+    printf("box and bead, minimum size %s: %zu triangles on the bead, %d face(s) failed, "
+           "%d small, minimum %g\n",
+           given ? "given" : "default", on_bead, m->n_failed_faces, m->small_faces,
+           m->small_min);
+    if (given)
+      CHECK(on_bead == 0 && m->n_failed_faces == 1 && m->small_faces == 0);
+    else
+      CHECK(on_bead >= 8 && m->n_failed_faces == 0 && m->small_faces == 1 &&
+            fabs(m->small_min - 0.25) < 1e-3);
+    hoc_mesh_destroy(&m);
+  }
+  hoc_model_destroy(&model);
+}
+
 int main(void) {
+  test_small_face();
   test_free_entities();
   test_split_on_curves();
   test_two_faces_one_edge();

@@ -885,15 +885,63 @@ done:
   return status;
 }
 
+/* Faces gmsh leaves without triangles because they are smaller than the
+ * default minimum size (HOC_LINEAR_SMALL_FACE): *mesh made again with the
+ * minimum lowered for them, and o->size_min set to it if that is kept. */
+static hoc_status fit_small_faces(hoc_model *model, hoc_linear_options *o, const int *algorithm,
+                                  hoc_mesh **mesh) {
+  const hoc_mesh *m = *mesh;
+  if (!m->n_failed_faces || o->size_min > 0) return HOC_OK;
+  double hmax, hmin, need = HUGE_VAL;
+  hoc_linear_sizes(model, o, &hmax, &hmin);
+  for (int k = 0; k < m->n_failed_faces; ++k) {
+    int f = m->failed_faces[k];
+    if (model->mesher_failed && model->mesher_failed[f]) continue; /* crashed, timed out */
+    const double *b = model->faces[f].bbox;
+    double across = fmax(b[3] - b[0], fmax(b[4] - b[1], b[5] - b[2]));
+    if (across < HOC_LINEAR_SMALL_FACE * hmin)
+      need = fmin(need, across / HOC_LINEAR_SMALL_FACE_EDGES);
+  }
+  if (!(need < hmin) || !(need >= 1e-6 * model->diagonal)) return HOC_OK;
+  hoc_linear_options lowered = *o;
+  lowered.size_min = need;
+  hoc_mesh *trial = NULL;
+  hoc_status status = generate_sized(model, &lowered, algorithm, &trial);
+  if (status == HOC_ERR_INTERRUPTED || status == HOC_ERR_MEMORY) return status;
+  if (status == HOC_OK && trial->n_failed_faces < m->n_failed_faces &&
+      trial->n_elems <= HOC_LINEAR_GRADED_GROWTH * m->n_elems) {
+    trial->small_faces = m->n_failed_faces - trial->n_failed_faces;
+    trial->small_min = need;
+    hoc_mesh_destroy(mesh);
+    *mesh = trial;
+    *o = lowered;
+    return HOC_OK;
+  }
+  hoc_mesh_destroy(&trial);
+  return HOC_OK;
+}
+
 hoc_status hoc_mesh_generate_linear_with(hoc_model *model, const hoc_linear_options *options,
                                          const int *algorithm, hoc_mesh **mesh) {
   double t0 = hoc_now();
   HOC_TRY(generate_sized(model, options, algorithm, mesh));
-  if (options && !options->grading) return HOC_OK;
+  hoc_linear_options o;
+  hoc_linear_options_default(&o);
+  if (options) o = *options;
+  hoc_status status = fit_small_faces(model, &o, algorithm, mesh);
+  if (status != HOC_OK) {
+    hoc_mesh_destroy(mesh);
+    return status;
+  }
+  if (!o.grading) return HOC_OK;
   double budget = HOC_LINEAR_GRADED_GROWTH * (hoc_now() - t0) + HOC_LINEAR_GRADED_SECONDS;
-  HOC_TRY(hoc_mesh_grade(model, options, algorithm, budget, mesh));
+  int small = (*mesh)->small_faces;
+  double small_min = (*mesh)->small_min;
+  HOC_TRY(hoc_mesh_grade(model, &o, algorithm, budget, mesh));
+  (*mesh)->small_faces = small;
+  (*mesh)->small_min = small_min;
   /* slivers on the surface that a swap of their edge removes */
-  hoc_status status = hoc_mesh_swap_edges(*mesh, &(*mesh)->swapped_edges, (*mesh)->swap_min_q);
+  status = hoc_mesh_swap_edges(*mesh, &(*mesh)->swapped_edges, (*mesh)->swap_min_q);
   if (status != HOC_OK) hoc_mesh_destroy(mesh);
   return status;
 }

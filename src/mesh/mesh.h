@@ -71,6 +71,9 @@ struct hoc_mesh {
   double swap_min_q[2];      /* before and after */
   int n_failed_faces;
   int *failed_faces;        /* [n_failed_faces] face indices the mesher could not mesh */
+  int small_faces;          /* faces meshed only with the minimum size lowered to
+                               small_min (HOC_LINEAR_SMALL_FACE) */
+  double small_min;
   int timed_out_faces;      /* how many of them gmsh did not finish meshing in
                                mesher_timeout seconds (hoc_linear_options) */
   int known_failed_faces;   /* how many of them were left out from the model's record
@@ -441,6 +444,16 @@ hoc_status hoc_mesh_generate_linear_with(hoc_model *model, const hoc_linear_opti
  * size and twice it, the graded meshing takes 1.5 times the first's at
  * most. */
 #define HOC_LINEAR_GRADED_SECONDS 10.0
+/* A face under HOC_LINEAR_SMALL_FACE x the default minimum size across
+ * (the largest side of its box) that gmsh leaves without triangles: its
+ * curves got one segment each, too few to bound a mesh (a sphere of
+ * radius 0.5 beside a box 1000 across, minimum size 6.2). Unless the user
+ * set the minimum size, the linear mesh is made again with it lowered to
+ * the smallest such face's size / HOC_LINEAR_SMALL_FACE_EDGES, and kept if
+ * fewer faces fail and it has at most HOC_LINEAR_GRADED_GROWTH times the
+ * elements. */
+#define HOC_LINEAR_SMALL_FACE 2
+#define HOC_LINEAR_SMALL_FACE_EDGES 4
 
 /* Edge swaps of the linear mesh (mesh/swap.c): a swap is made where the
  * smaller q of the two new triangles exceeds the smaller of the two old

@@ -175,6 +175,16 @@ static hoc_status note_graded(const hoc_run *run, const hoc_mesh *lin) {
                        lin->ungraded_elements, lin->ungraded_min_q);
 }
 
+/* Faces smaller than the default minimum size, meshed with it lowered
+ * (HOC_LINEAR_SMALL_FACE). */
+static hoc_status note_small_faces(const hoc_run *run, const hoc_mesh *lin) {
+  if (!lin->small_faces) return HOC_OK;
+  return hoc_run_event(run, HOC_EVENT_NOTE,
+                       "%d face(s) smaller than the minimum size had no triangles: the linear "
+                       "mesh is made with the minimum size %g (--size-min sets it)",
+                       lin->small_faces, lin->small_min);
+}
+
 /* Edges of the linear mesh swapped (mesh/swap.c). */
 static hoc_status note_swapped(const hoc_run *run, const hoc_mesh *lin) {
   if (!lin->swapped_edges) return HOC_OK;
@@ -489,6 +499,7 @@ static hoc_status mesh_model_run(hoc_run *run, hoc_model *model, model_meshes *m
     double t_lin = hoc_now() - t0;
     HOC_TRY_GOTO(warn_failed_faces(run, m->lin), done);
     HOC_TRY_GOTO(note_collapsed(run, m->lin), done);
+    HOC_TRY_GOTO(note_small_faces(run, m->lin), done);
     HOC_TRY_GOTO(note_graded(run, m->lin), done);
     HOC_TRY_GOTO(note_swapped(run, m->lin), done);
     HOC_TRY_GOTO(hoc_run_stage(run, r, "linear", m->lin, t_lin, NULL, NULL), done);
