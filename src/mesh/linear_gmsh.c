@@ -2,6 +2,7 @@
  * classification and parameters.
  * SPDX-License-Identifier: GPL-2.0-or-later */
 #include "cad/gmsh_util.h"
+#include "core/geometry.h"
 #include "core/hash.h"
 #include "mesh/mesh.h"
 
@@ -569,7 +570,8 @@ static hoc_status remember_failures(hoc_model *model, const unsigned char *skip,
  * remembered: a face that fails with the graded sizes alone is not one
  * gmsh cannot mesh. */
 static hoc_status generate_once(hoc_model *model, const hoc_linear_options *options,
-                                const int *algorithm, const hoc_linear_grading *grading,
+                                const int *algorithm, int extend,
+                                const hoc_linear_grading *grading,
                                 double budget, int *timed_out, hoc_mesh **mesh) {
   hoc_linear_options o;
   hoc_linear_options_default(&o);
@@ -608,7 +610,7 @@ static hoc_status generate_once(hoc_model *model, const hoc_linear_options *opti
    * integration of 1 / size along the curves resolves to its precision:
    * at its default 1e-9 the graded meshing of nist_ctc_01 takes 26 s, at
    * 1e-5 1.3 s (0.02% more triangles) */
-  gmshOptionSetNumber("Mesh.MeshSizeExtendFromBoundary", grading ? 0 : 1, &ierr);
+  gmshOptionSetNumber("Mesh.MeshSizeExtendFromBoundary", grading || !extend ? 0 : 1, &ierr);
   gmshOptionSetNumber("Mesh.LcIntegrationPrecision", grading ? 1e-5 : 1e-9, &ierr);
   gmshOptionSetNumber("Mesh.ElementOrder", 1, &ierr);
   if (o.progress && o.progress(o.progress_user, "linear mesh", 0.0))
@@ -737,7 +739,7 @@ static double size_at(int dim, int tag, double x, double y, double z, void *data
 
 /* The mesh with the options' sizes (and face_size's bounds). */
 static hoc_status generate_sized(hoc_model *model, const hoc_linear_options *options,
-                                 const int *algorithm, hoc_mesh **mesh) {
+                                 const int *algorithm, int extend, hoc_mesh **mesh) {
   HOC_CHECK(mesh, HOC_ERR_ARGUMENT, "mesh output is NULL");
   *mesh = NULL;
   HOC_CHECK(model && model->is_gmsh, HOC_ERR_ARGUMENT,
@@ -747,7 +749,7 @@ static hoc_status generate_sized(hoc_model *model, const hoc_linear_options *opt
               "meshing algorithm %d of face %d is not one of gmsh's (0..%d)", algorithm[f],
               model->faces[f].tag, HOC_GMSH_ALGORITHM_MAX);
   if (!options || !options->face_size)
-    return generate_once(model, options, algorithm, NULL, 0, NULL, mesh);
+    return generate_once(model, options, algorithm, extend, NULL, 0, NULL, mesh);
   /* faces meshed finer: the bound on the face and on its boundary curves */
   sizing s = {0};
   for (int f = 0; f < model->n_faces; ++f) {
@@ -778,7 +780,7 @@ static hoc_status generate_sized(hoc_model *model, const hoc_linear_options *opt
   int ierr = 0;
   gmshModelMeshSetSizeCallback(size_at, &s, &ierr);
   status = ierr ? HOC_ERROR(HOC_ERR_MESH, "gmsh refused the mesh size callback")
-                : generate_once(model, options, algorithm, NULL, 0, NULL, mesh);
+                : generate_once(model, options, algorithm, extend, NULL, 0, NULL, mesh);
   gmshModelMeshRemoveSizeCallback(&ierr);
 done:
   free(s.face_size);
@@ -835,7 +837,7 @@ static hoc_status better(const hoc_mesh *a, const hoc_mesh *b, int *yes, double 
 
 hoc_status hoc_mesh_generate_linear_ungraded(hoc_model *model, const hoc_linear_options *options,
                                              hoc_mesh **mesh) {
-  return generate_sized(model, options, NULL, mesh);
+  return generate_sized(model, options, NULL, 1, mesh);
 }
 
 hoc_status hoc_mesh_grade(hoc_model *model, const hoc_linear_options *options,
@@ -860,7 +862,7 @@ hoc_status hoc_mesh_grade(hoc_model *model, const hoc_linear_options *options,
     goto done;
   }
   int timed_out = 0;
-  status = generate_once(model, options, algorithm, g, budget, &timed_out, &graded);
+  status = generate_once(model, options, algorithm, 0, g, budget, &timed_out, &graded);
   if (timed_out) (*mesh)->graded_budget = budget;
   gmshModelMeshRemoveSizeCallback(&ierr);
   if (status == HOC_ERR_INTERRUPTED || status == HOC_ERR_MEMORY) goto done;
@@ -886,7 +888,7 @@ done:
 }
 
 /* Faces gmsh leaves without triangles because they are smaller than the
- * default minimum size (HOC_LINEAR_SMALL_FACE): *mesh made again with the
+ * default minimum size (HOC_LINEAR_SMALL_FACE_EDGES): *mesh made again with the
  * minimum lowered for them, and o->size_min set to it if that is kept. */
 static hoc_status fit_small_faces(hoc_model *model, hoc_linear_options *o, const int *algorithm,
                                   hoc_mesh **mesh) {
@@ -894,41 +896,94 @@ static hoc_status fit_small_faces(hoc_model *model, hoc_linear_options *o, const
   if (!m->n_failed_faces || o->size_min > 0) return HOC_OK;
   double hmax, hmin, need = HUGE_VAL;
   hoc_linear_sizes(model, o, &hmax, &hmin);
+  unsigned char *record = model->mesher_failed, *kept = NULL;
   for (int k = 0; k < m->n_failed_faces; ++k) {
     int f = m->failed_faces[k];
-    if (model->mesher_failed && model->mesher_failed[f]) continue; /* crashed, timed out */
+    if (record && record[f] == FACE_TIMED_OUT) continue;
     const double *b = model->faces[f].bbox;
     double across = fmax(b[3] - b[0], fmax(b[4] - b[1], b[5] - b[2]));
-    if (across < HOC_LINEAR_SMALL_FACE * hmin)
-      need = fmin(need, across / HOC_LINEAR_SMALL_FACE_EDGES);
+    need = fmin(need, across / HOC_LINEAR_SMALL_FACE_EDGES);
   }
   if (!(need < hmin) || !(need >= 1e-6 * model->diagonal)) return HOC_OK;
+  /* a face whose curves had too few segments may also have crashed the
+   * mesher (a torus's): tried again, its record set aside meanwhile */
+  size_t nf = (size_t)model->n_faces;
+  if (record) {
+    HOC_ALLOC(kept, nf);
+    memcpy(kept, record, nf);
+    for (int k = 0; k < m->n_failed_faces; ++k)
+      if (record[m->failed_faces[k]] != FACE_TIMED_OUT) record[m->failed_faces[k]] = 0;
+  }
   hoc_linear_options lowered = *o;
   lowered.size_min = need;
   hoc_mesh *trial = NULL;
-  hoc_status status = generate_sized(model, &lowered, algorithm, &trial);
-  if (status == HOC_ERR_INTERRUPTED || status == HOC_ERR_MEMORY) return status;
-  if (status == HOC_OK && trial->n_failed_faces < m->n_failed_faces &&
-      trial->n_elems <= HOC_LINEAR_GRADED_GROWTH * m->n_elems) {
+  hoc_status status = generate_sized(model, &lowered, algorithm, 1, &trial);
+  int keep = status == HOC_OK && trial->n_failed_faces < m->n_failed_faces &&
+             trial->n_elems <= HOC_LINEAR_GRADED_GROWTH * m->n_elems;
+  if (keep) {
     trial->small_faces = m->n_failed_faces - trial->n_failed_faces;
     trial->small_min = need;
     hoc_mesh_destroy(mesh);
     *mesh = trial;
     *o = lowered;
-    return HOC_OK;
+  } else {
+    hoc_mesh_destroy(&trial);
+    if (record) memcpy(record, kept, nf);
   }
-  hoc_mesh_destroy(&trial);
-  return HOC_OK;
+  free(kept);
+  return status == HOC_ERR_INTERRUPTED || status == HOC_ERR_MEMORY ? status : HOC_OK;
+}
+
+/* A mesh with more triangles than its faces' area holds at the minimum
+ * size (HOC_LINEAR_UNEXTENDED): *mesh made again without gmsh's extension
+ * of the curves' sizes into the faces, kept if it has fewer triangles and
+ * no more failed faces. */
+static hoc_status unextend(hoc_model *model, const hoc_linear_options *o, const int *algorithm,
+                           hoc_mesh **mesh) {
+  const hoc_mesh *m = *mesh;
+  double hmax, hmin, area = 0;
+  hoc_linear_sizes(model, o, &hmax, &hmin);
+  for (size_t e = 0; e < m->n_elems; ++e) {
+    const size_t *c = m->conn + e * (size_t)m->np;
+    const double *x0 = m->xyz + 3 * c[0], *x1 = m->xyz + 3 * c[1], *x2 = m->xyz + 3 * c[2];
+    double a[3], b[3], n[3];
+    for (int k = 0; k < 3; ++k)
+      a[k] = x1[k] - x0[k], b[k] = x2[k] - x0[k];
+    hoc_cross3(a, b, n);
+    area += 0.5 * sqrt(hoc_dot3(n, n));
+  }
+  /* and the triangles along the faces' sides: a strip narrower than the
+   * minimum has them all there */
+  double sides = 0;
+  for (size_t l = 0; l < m->n_lines; ++l)
+    sides += 2 * hoc_dist3(m->xyz + 3 * m->line_conn[2 * l], m->xyz + 3 * m->line_conn[2 * l + 1]);
+  double most =
+      HOC_LINEAR_UNEXTENDED * (area / (0.25 * sqrt(3.0) * hmin * hmin) + sides / hmin);
+  if (!((double)m->n_elems > most)) return HOC_OK;
+  hoc_mesh *trial = NULL;
+  hoc_status status = generate_sized(model, o, algorithm, 0, &trial);
+  if (status == HOC_OK && trial->n_elems < m->n_elems &&
+      trial->n_failed_faces <= m->n_failed_faces) {
+    trial->unextended_elements = m->n_elems;
+    trial->small_faces = m->small_faces;
+    trial->small_min = m->small_min;
+    hoc_mesh_destroy(mesh);
+    *mesh = trial;
+  } else {
+    hoc_mesh_destroy(&trial);
+  }
+  return status == HOC_ERR_INTERRUPTED || status == HOC_ERR_MEMORY ? status : HOC_OK;
 }
 
 hoc_status hoc_mesh_generate_linear_with(hoc_model *model, const hoc_linear_options *options,
                                          const int *algorithm, hoc_mesh **mesh) {
   double t0 = hoc_now();
-  HOC_TRY(generate_sized(model, options, algorithm, mesh));
+  HOC_TRY(generate_sized(model, options, algorithm, 1, mesh));
   hoc_linear_options o;
   hoc_linear_options_default(&o);
   if (options) o = *options;
   hoc_status status = fit_small_faces(model, &o, algorithm, mesh);
+  if (status == HOC_OK) status = unextend(model, &o, algorithm, mesh);
   if (status != HOC_OK) {
     hoc_mesh_destroy(mesh);
     return status;
@@ -937,9 +992,11 @@ hoc_status hoc_mesh_generate_linear_with(hoc_model *model, const hoc_linear_opti
   double budget = HOC_LINEAR_GRADED_GROWTH * (hoc_now() - t0) + HOC_LINEAR_GRADED_SECONDS;
   int small = (*mesh)->small_faces;
   double small_min = (*mesh)->small_min;
+  size_t unextended = (*mesh)->unextended_elements;
   HOC_TRY(hoc_mesh_grade(model, &o, algorithm, budget, mesh));
   (*mesh)->small_faces = small;
   (*mesh)->small_min = small_min;
+  (*mesh)->unextended_elements = unextended;
   /* slivers on the surface that a swap of their edge removes */
   status = hoc_mesh_swap_edges(*mesh, &(*mesh)->swapped_edges, (*mesh)->swap_min_q);
   if (status != HOC_OK) hoc_mesh_destroy(mesh);

@@ -72,8 +72,10 @@ struct hoc_mesh {
   int n_failed_faces;
   int *failed_faces;        /* [n_failed_faces] face indices the mesher could not mesh */
   int small_faces;          /* faces meshed only with the minimum size lowered to
-                               small_min (HOC_LINEAR_SMALL_FACE) */
+                               small_min (HOC_LINEAR_SMALL_FACE_EDGES) */
   double small_min;
+  size_t unextended_elements; /* > 0: gmsh's mesh with the curves' sizes extended into the
+                                 faces had this many triangles (HOC_LINEAR_UNEXTENDED) */
   int timed_out_faces;      /* how many of them gmsh did not finish meshing in
                                mesher_timeout seconds (hoc_linear_options) */
   int known_failed_faces;   /* how many of them were left out from the model's record
@@ -444,16 +446,31 @@ hoc_status hoc_mesh_generate_linear_with(hoc_model *model, const hoc_linear_opti
  * size and twice it, the graded meshing takes 1.5 times the first's at
  * most. */
 #define HOC_LINEAR_GRADED_SECONDS 10.0
-/* A face under HOC_LINEAR_SMALL_FACE x the default minimum size across
- * (the largest side of its box) that gmsh leaves without triangles: its
- * curves got one segment each, too few to bound a mesh (a sphere of
- * radius 0.5 beside a box 1000 across, minimum size 6.2). Unless the user
- * set the minimum size, the linear mesh is made again with it lowered to
- * the smallest such face's size / HOC_LINEAR_SMALL_FACE_EDGES, and kept if
- * fewer faces fail and it has at most HOC_LINEAR_GRADED_GROWTH times the
- * elements. */
-#define HOC_LINEAR_SMALL_FACE 2
-#define HOC_LINEAR_SMALL_FACE_EDGES 4
+/* A face under HOC_LINEAR_SMALL_FACE_EDGES x the default minimum size
+ * across (the largest side of its box) that gmsh leaves without
+ * triangles: its curves got one segment or two, too few to bound a mesh
+ * (a sphere of radius 0.5 beside a box 1000 across, minimum size 6.2; a
+ * torus 1 across with a tube 0.1 thick beside a cube 50 across, minimum
+ * 0.46). Unless the user set the minimum size, the linear mesh is made
+ * again with it lowered to the smallest such face's size /
+ * HOC_LINEAR_SMALL_FACE_EDGES, and kept if fewer faces fail and it has at
+ * most HOC_LINEAR_GRADED_GROWTH times the elements (the torus, 1.08
+ * across: a quarter of that, 0.27, still gives its tube's circle two
+ * segments and no triangles; 0.25 does, 0.135 serves). */
+#define HOC_LINEAR_SMALL_FACE_EDGES 8
+/* gmsh extends the sizes of the curves' edges into the faces they bound;
+ * where a face holds curves shorter than the minimum size, their edges are
+ * shorter still and the extension spreads those sizes over the face,
+ * below the minimum (a plate 200 across with 25 bosses of radius 0.15:
+ * 1.5 million triangles on its top face, in gmsh 4.8 and 5.0 alike; 1 866
+ * without the extension). A mesh with more than HOC_LINEAR_UNEXTENDED x
+ * the triangles its faces hold at the minimum size (their area over an
+ * equilateral triangle of that edge, plus their sides' length over that
+ * edge: a strip narrower than the minimum has triangles all along its
+ * sides) is made again without the extension, kept if it has fewer
+ * triangles and no more failed faces; the grading (above) then sizes it
+ * down to the short curves. */
+#define HOC_LINEAR_UNEXTENDED 2
 
 /* Edge swaps of the linear mesh (mesh/swap.c): a swap is made where the
  * smaller q of the two new triangles exceeds the smaller of the two old

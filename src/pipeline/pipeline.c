@@ -176,8 +176,15 @@ static hoc_status note_graded(const hoc_run *run, const hoc_mesh *lin) {
 }
 
 /* Faces smaller than the default minimum size, meshed with it lowered
- * (HOC_LINEAR_SMALL_FACE). */
+ * (HOC_LINEAR_SMALL_FACE_EDGES); a mesh made again without gmsh's
+ * extension of sizes into the faces (HOC_LINEAR_UNEXTENDED). */
 static hoc_status note_small_faces(const hoc_run *run, const hoc_mesh *lin) {
+  if (lin->unextended_elements)
+    HOC_TRY(hoc_run_event(run, HOC_EVENT_NOTE,
+                          "gmsh's linear mesh had %zu triangles, more than twice what the faces "
+                          "hold at the minimum size (it extends the edges of curves shorter than "
+                          "that into the faces): made again without that extension",
+                          lin->unextended_elements));
   if (!lin->small_faces) return HOC_OK;
   return hoc_run_event(run, HOC_EVENT_NOTE,
                        "%d face(s) smaller than the minimum size had no triangles: the linear "
