@@ -934,10 +934,10 @@ static hoc_status fit_small_faces(hoc_model *model, hoc_linear_options *o, const
   return status == HOC_ERR_INTERRUPTED || status == HOC_ERR_MEMORY ? status : HOC_OK;
 }
 
-/* A mesh with more triangles than its faces' area holds at the minimum
- * size (HOC_LINEAR_UNEXTENDED): *mesh made again without gmsh's extension
- * of the curves' sizes into the faces, kept if it has fewer triangles and
- * no more failed faces. */
+/* A mesh with more than HOC_LINEAR_UNEXTENDED x the triangles its faces
+ * hold at the minimum size: *mesh made again without gmsh's extension of
+ * the curves' sizes into the faces, kept if it has fewer triangles and no
+ * more failed faces. */
 static hoc_status unextend(hoc_model *model, const hoc_linear_options *o, const int *algorithm,
                            hoc_mesh **mesh) {
   const hoc_mesh *m = *mesh;
