@@ -876,6 +876,9 @@ hoc_status hoc_mesh_grade(hoc_model *model, const hoc_linear_options *options,
     graded->graded_faces = hoc_linear_grading_faces(g);
     graded->ungraded_elements = (*mesh)->n_elems;
     graded->ungraded_min_q = first_q;
+    graded->small_faces = (*mesh)->small_faces;
+    graded->small_min = (*mesh)->small_min;
+    graded->unextended_elements = (*mesh)->unextended_elements;
     hoc_mesh_destroy(mesh);
     *mesh = graded;
     graded = NULL;
@@ -990,13 +993,7 @@ hoc_status hoc_mesh_generate_linear_with(hoc_model *model, const hoc_linear_opti
   }
   if (!o.grading) return HOC_OK;
   double budget = HOC_LINEAR_GRADED_GROWTH * (hoc_now() - t0) + HOC_LINEAR_GRADED_SECONDS;
-  int small = (*mesh)->small_faces;
-  double small_min = (*mesh)->small_min;
-  size_t unextended = (*mesh)->unextended_elements;
   HOC_TRY(hoc_mesh_grade(model, &o, algorithm, budget, mesh));
-  (*mesh)->small_faces = small;
-  (*mesh)->small_min = small_min;
-  (*mesh)->unextended_elements = unextended;
   /* slivers on the surface that a swap of their edge removes */
   status = hoc_mesh_swap_edges(*mesh, &(*mesh)->swapped_edges, (*mesh)->swap_min_q);
   if (status != HOC_OK) hoc_mesh_destroy(mesh);

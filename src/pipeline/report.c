@@ -170,7 +170,8 @@ static const hoc_stage_record *optimized_stage(const hoc_stages *r) {
 /* Where tangled elements remain: which, and why. `opt` is the optimised
  * stage, or NULL if the mesh was not optimised. */
 static hoc_status find_tangled(hoc_report *report, const hoc_mesh *mesh, const double *q,
-                               const hoc_stage_record *opt, int from_cad) {
+                               const hoc_stage_record *opt, int from_cad,
+                               hoc_pinch_table *pinches) {
   /* hoc_mesh_model can make a finer linear mesh; hoc_mesh_repair keeps its input's */
   const char *advice = from_cad
                            ? "try a smaller --size-min or --size, or a larger --curvature"
@@ -182,12 +183,9 @@ static hoc_status find_tangled(hoc_report *report, const hoc_mesh *mesh, const d
   /* elements across a fold of their face: no finer mesh of the same kind avoids those */
   size_t across = 0, at_cusp = 0, pinched = 0, either = 0; /* either: a fold or a pinch */
   unsigned char *tangled = NULL, *cusp = NULL;
-  hoc_pinch_table pinches = {0};
   HOC_ALLOC(tangled, ne);
   hoc_status status = HOC_OK;
   HOC_ALLOC_GOTO(cusp, ne, done);
-  HOC_TRY_GOTO(
-      hoc_pinch_table_init(&pinches, mesh->model, HOC_PIPELINE_PINCH_SHARE, HOC_PINCHES), done);
   for (size_t e = 0; e < ne; ++e)
     tangled[e] = q[e] == 0.0;
   HOC_TRY_GOTO(hoc_mesh_elements_at_cusps(mesh, HOC_PIPELINE_CUSP_DEGREES, tangled, cusp), done);
@@ -195,7 +193,7 @@ static hoc_status find_tangled(hoc_report *report, const hoc_mesh *mesh, const d
     int folds = 0, pinch = 0;
     if (q[e] != 0.0) continue;
     if (hoc_mesh_element_folds(mesh, e, &folds) != HOC_OK) folds = 0;
-    HOC_TRY_GOTO(hoc_mesh_element_across_pinch(mesh, e, &pinches, &pinch), done);
+    HOC_TRY_GOTO(hoc_mesh_element_across_pinch(mesh, e, pinches, &pinch), done);
     across += folds;
     pinched += pinch;
     either += folds || pinch;
@@ -265,7 +263,6 @@ static hoc_status find_tangled(hoc_report *report, const hoc_mesh *mesh, const d
              at_cusp, HOC_PIPELINE_CUSP_DEGREES);
   status = add_finding(report, HOC_EVENT_WARNING, &t);
 done:
-  hoc_pinch_table_free(&pinches);
   free(tangled);
   free(cusp);
   return status;
@@ -279,7 +276,7 @@ done:
  * passes through the pinch's point): say so, and what the rest of the mesh
  * reaches. */
 static hoc_status find_poor(hoc_report *report, const hoc_stages *r, const hoc_mesh *mesh,
-                             const double *q) {
+                            const double *q, hoc_pinch_table *pinches) {
   double bound = HOC_PIPELINE_POOR * r->s[0].stage.stats.min;
   double rest = 1, neither = 1; /* q <= 1: at no cusp; at no cusp and across no pinch */
   size_t ne = hoc_mesh_num_elements(mesh), low = 0, at_cusp = 0, at_pinch = 0;
@@ -288,9 +285,6 @@ static hoc_status find_poor(hoc_report *report, const hoc_stages *r, const hoc_m
   const hoc_stage_record *opt = optimized_stage(r);
   if (!opt || !opt->stage.converged) return HOC_OK; /* a low q may still be the optimiser's */
   if (r->n < 2 || !(r->s[r->n - 1].stage.stats.min < bound)) return HOC_OK; /* none below */
-  hoc_pinch_table pinches = {0};
-  HOC_TRY(hoc_pinch_table_init(&pinches, mesh->model, HOC_PIPELINE_PINCH_SHARE, HOC_PINCHES));
-  hoc_status status = HOC_OK;
   for (size_t e = 0; e < ne; ++e) {
     if (q[e] == 0.0 || (q[e] >= bound && q[e] >= neither)) continue; /* changes nothing below */
     hoc_cusp c;
@@ -308,7 +302,7 @@ static hoc_status find_poor(hoc_report *report, const hoc_stages *r, const hoc_m
     }
     rest = fmin(rest, q[e]);
     int across = 0;
-    HOC_TRY_GOTO(hoc_mesh_element_across_pinch(mesh, e, &pinches, &across), done);
+    HOC_TRY(hoc_mesh_element_across_pinch(mesh, e, pinches, &across));
     if (across) {
       if (!(q[e] < bound)) continue;
       ++low;
@@ -330,7 +324,7 @@ static hoc_status find_poor(hoc_report *report, const hoc_stages *r, const hoc_m
              "elements at no cusp have min q %.4f",
              at_cusp, low, r->s[0].stage.stats.min, HOC_PIPELINE_CUSP_DEGREES, list,
              at_cusp > 3 ? "; ..." : "", rest);
-    HOC_TRY_GOTO(add_finding(report, HOC_EVENT_NOTE, &t), done);
+    HOC_TRY(add_finding(report, HOC_EVENT_NOTE, &t));
   }
   if (at_pinch) {
     text t = {0};
@@ -341,11 +335,9 @@ static hoc_status find_poor(hoc_report *report, const hoc_stages *r, const hoc_m
              "the elements at no cusp and across no pinch have min q %.4f",
              at_pinch, low, r->s[0].stage.stats.min, plist, at_pinch > 3 ? "; ..." : "",
              neither);
-    HOC_TRY_GOTO(add_finding(report, HOC_EVENT_NOTE, &t), done);
+    HOC_TRY(add_finding(report, HOC_EVENT_NOTE, &t));
   }
-done:
-  hoc_pinch_table_free(&pinches);
-  return status;
+  return HOC_OK;
 }
 
 hoc_status hoc_report_finish(hoc_report *report, const hoc_stages *r, const hoc_mesh *final,
@@ -356,12 +348,18 @@ hoc_status hoc_report_finish(hoc_report *report, const hoc_stages *r, const hoc_
   free(report->quality);
   HOC_ALLOC(report->quality, report->elements);
   HOC_TRY(hoc_mesh_measure(final, report->measure, report->quality, NULL, NULL));
+  /* each face's pinches searched once for both findings */
+  hoc_pinch_table pinches = {0};
+  HOC_TRY(hoc_pinch_table_init(&pinches, final->model, HOC_PIPELINE_PINCH_SHARE, HOC_PINCHES));
+  hoc_status status = HOC_OK;
   if (findings & HOC_FIND_TANGLED)
-    HOC_TRY(find_tangled(report, final, report->quality, optimized_stage(r),
-                         !!(findings & HOC_FIND_FROM_CAD)));
-  if (findings & HOC_FIND_POOR) HOC_TRY(find_poor(report, r, final, report->quality));
+    status = find_tangled(report, final, report->quality, optimized_stage(r),
+                          !!(findings & HOC_FIND_FROM_CAD), &pinches);
+  if (status == HOC_OK && (findings & HOC_FIND_POOR))
+    status = find_poor(report, r, final, report->quality, &pinches);
+  hoc_pinch_table_free(&pinches);
   report->seconds = hoc_now() - t0;
-  return HOC_OK;
+  return status;
 }
 
 /* JSON -------------------------------------------------------------------- */
