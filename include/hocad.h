@@ -139,6 +139,9 @@ typedef struct hoc_linear_options {
                     faces where gmsh's has them (within 4 x the first's time + 10 s),
                     and edges swapped where that raises the
                     smaller q of their triangles (hoc_mesh_generate_linear); 0: gmsh's mesh */
+  int keep_pinches; /**< 0 (default): the mesh is cut along its faces' pinches (lines of a
+                         face's (u, v) that the CAD maps to one point: no triangle across
+                         one, its point a node); 1: left as meshed (comparisons) */
 } hoc_linear_options;
 
 /** Fill options with defaults (all "choose", order 1, no progress, grading). */

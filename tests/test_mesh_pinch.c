@@ -8,8 +8,13 @@
  *   point, a triple knot at u = 1): one pinch, u = 1. surf114.igs's face 1
  *   (an IGES spline surface): a pinch near u = 7.64, where its iso-line
  *   spreads 0.003 of the face's 90.
- * - pinched_sheet at order 5: elements end below 0.9 x the linear mesh's
- *   min q, every one of them across the pinch, and the note says so.
+ * - pinched_sheet's linear mesh is cut along its pinch (hoc_mesh_cut_pinches):
+ *   no element across it, the point a node with pole slots; gmsh's mesh
+ *   (keep_pinches) has elements across. At order 5 the cut mesh ends
+ *   valid and within 0.9 x the linear mesh's min q.
+ * - From gmsh's mesh, not cut, elements end below 0.9 x the linear mesh's
+ *   min q at order 5, every one of them across the pinch, and the note
+ *   says so.
  * - A tangled element across the sheet's pinch (one of its linear mesh's,
  *   turned over) is one no split or finer mesh opens: its face is
  *   HOC_UNREFINABLE_PINCHES, and, the only one tangled, it is EACH; the
@@ -69,6 +74,67 @@ static void test_files(void) {
   CHECK(near == 1);
 }
 
+/* The linear mesh of pinched_sheet, cut along its pinch or not. */
+static hoc_mesh *sheet_mesh(hoc_model *model, int keep_pinches) {
+  hoc_linear_options lo;
+  hoc_linear_options_default(&lo);
+  lo.keep_pinches = keep_pinches;
+  hoc_mesh *lin = NULL;
+  CHECK_OK(hoc_mesh_generate_linear(model, &lo, &lin));
+  return lin;
+}
+
+/* Elements of m across one of the pinches of its face 0 found with the
+ * report's share. */
+static size_t count_across(const hoc_model *model, const hoc_mesh *m) {
+  hoc_pinch p[HOC_PINCHES];
+  int n = 0;
+  CHECK_OK(hoc_face_pinches(model, 0, HOC_PIPELINE_PINCH_SHARE, p, HOC_PINCHES, &n));
+  size_t across = 0;
+  for (size_t e = 0; e < hoc_mesh_num_elements(m); ++e)
+    across += (size_t)hoc_mesh_element_crosses_pinch(m, e, p, n);
+  return across;
+}
+
+static void test_cut(void) {
+  hoc_model *model = NULL;
+  CHECK_OK(hoc_model_open(DATA "pinched_sheet.step", &model));
+  if (!model) return;
+  hoc_mesh *kept = sheet_mesh(model, 1), *cut = sheet_mesh(model, 0), *mesh = NULL;
+  if (kept && cut) {
+    size_t across_kept = count_across(model, kept), across_cut = count_across(model, cut);
+    /* the pinch's point: a node whose slots on the face are poles */
+    size_t poles = 0;
+    for (size_t s = 0; s < cut->n_slots; ++s)
+      poles += cut->slot_pole[s] != 0 && cut->slot_face[s] == 0;
+    printf("pinched_sheet's linear mesh: %zu element(s) across the pinch; cut along %d "
+           "pinch(es): %zu across, %zu pole slot(s)\n",
+           across_kept, cut->cut_pinches, across_cut, poles);
+    CHECK(across_kept > 0 && cut->cut_pinches == 1 && across_cut == 0 && poles >= 2);
+  }
+  /* raised to order 5 and optimised: valid, within the quality bound */
+  hoc_mesh_options o;
+  hoc_mesh_options_default(&o);
+  o.order = 5;
+  hoc_report *r = NULL;
+  CHECK_OK(hoc_mesh_model(model, &o, &mesh, &r));
+  if (mesh && r) {
+    size_t ne = hoc_mesh_num_elements(mesh);
+    double lin_min = hoc_report_stage(r, 0)->stats.min;
+    const hoc_stage *last = hoc_report_stage(r, hoc_report_num_stages(r) - 1);
+    printf("pinched_sheet at order 5: %zu element(s), %zu tangled, min q %.4f (linear %.4f)\n",
+           ne, last->stats.tangled, last->stats.min, lin_min);
+    CHECK(last->stats.tangled == 0 && last->stats.min >= HOC_PIPELINE_POOR * lin_min &&
+          lin_min > 0);
+  }
+  hoc_report_destroy(&r);
+  hoc_mesh_destroy(&mesh);
+  hoc_mesh_destroy(&cut);
+  hoc_mesh_destroy(&kept);
+  hoc_model_destroy(&model);
+}
+
+/* The note on poor elements across a pinch, from a linear mesh not cut. */
 static void test_note(void) {
   hoc_model *model = NULL;
   CHECK_OK(hoc_model_open(DATA "pinched_sheet.step", &model));
@@ -76,7 +142,8 @@ static void test_note(void) {
   hoc_mesh_options o;
   hoc_mesh_options_default(&o);
   o.order = 5;
-  hoc_mesh *mesh = NULL;
+  hoc_mesh *given = sheet_mesh(model, 1), *mesh = NULL;
+  o.linear = given;
   hoc_report *r = NULL;
   CHECK_OK(hoc_mesh_model(model, &o, &mesh, &r));
   size_t ne = mesh ? hoc_mesh_num_elements(mesh) : 0, low = 0, across = 0;
@@ -107,6 +174,7 @@ static void test_note(void) {
   free(q);
   hoc_report_destroy(&r);
   hoc_mesh_destroy(&mesh);
+  hoc_mesh_destroy(&given);
   hoc_model_destroy(&model);
 }
 
@@ -131,6 +199,7 @@ static void test_unrefinable(void) {
   hoc_linear_options lo;
   memset(&lo, 0, sizeof lo);
   lo.order = 1;
+  lo.keep_pinches = 1;
   hoc_pinch p[HOC_PINCHES];
   int n = 0;
   CHECK_OK(hoc_face_pinches(model, 0, HOC_PIPELINE_PINCH_SHARE, p, HOC_PINCHES, &n));
@@ -159,6 +228,7 @@ static void test_unrefinable(void) {
 int main(void) {
   test_analytic();
   test_files();
+  test_cut();
   test_note();
   test_unrefinable();
   return test_report();

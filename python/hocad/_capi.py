@@ -82,6 +82,7 @@ class LinearOptions(Structure):
         ("progress_user", c_void_p),
         ("mesher_timeout", c_double),
         ("grading", c_int),
+        ("keep_pinches", c_int),
     ]
 
 

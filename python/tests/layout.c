@@ -35,6 +35,7 @@ int main(void) {
   FIELD(hoc_linear_options, progress_user);
   FIELD(hoc_linear_options, mesher_timeout);
   FIELD(hoc_linear_options, grading);
+  FIELD(hoc_linear_options, keep_pinches);
   SIZE(hoc_optimize_iteration);
   FIELD(hoc_optimize_iteration, iteration);
   FIELD(hoc_optimize_iteration, objective);

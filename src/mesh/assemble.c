@@ -498,6 +498,22 @@ static hoc_status slot_params(hoc_mesh *m, const hoc_mesh_source *src, double to
       double at = side % 2 ? f->hi[d] : f->lo[d], range = f->hi[d] - f->lo[d];
       if (fabs(p[d] - at) <= 1e-9 * range + 1e-300) pole |= (unsigned char)(1 << (1 - d));
     }
+    /* a curve node at a pinch of the face (a line of its (u, v) that maps
+     * to one point, inside it: pinch.c cuts the mesh there) */
+    if (!pole && m->dim[m->slot_node[s]] == HOC_ON_CURVE && hoc_face_may_pinch(f) &&
+        isfinite(p[0]) && isfinite(p[1])) {
+      double du[3], dv[3], spread;
+      HOC_TRY_GOTO(hoc_cad_face_eval(model, m->slot_face[s], 1, p, NULL, du, dv), done);
+      double a = sqrt(hoc_dot3(du, du)), b = sqrt(hoc_dot3(dv, dv));
+      int stalled_v = b <= HOC_CAD_STALL * f->dv_scale;
+      int stalled_u = a <= HOC_CAD_STALL * f->du_scale;
+      for (int d = 0; d < 2; ++d) {
+        /* d: the line's fixed coordinate, the other one stalls along it */
+        if (!(d == 0 ? stalled_v && !stalled_u : stalled_u && !stalled_v)) continue;
+        HOC_TRY_GOTO(hoc_face_line_spread(model, m->slot_face[s], d, p[d], &spread), done);
+        if (spread <= hoc_mesh_collapse_distance(model)) pole |= (unsigned char)(1 << (1 - d));
+      }
+    }
     if (!which)
       m->slot_pole[s] |= pole;
     else if ((m->slot_pole[s] | pole) != m->slot_pole[s])
@@ -517,9 +533,27 @@ done:
  * (NAN if unknown). */
 static int end_param(const hoc_mesh *m, size_t i, int c, double near, double *t) {
   if (m->dim[i] == HOC_ON_CURVE) {
-    if (m->entity[i] != c) return 0;
-    *t = m->param[2 * i];
-    return 1;
+    if (m->entity[i] == c) {
+      *t = m->param[2 * i];
+      return 1;
+    }
+    /* a node of another curve that passes through this one's point (a
+     * pinch's point, on every curve that crosses the pinch: pinch.c) */
+    const hoc_cad_curve *cv = &m->model->curves[c];
+    double tol = hoc_mesh_collapse_distance(m->model);
+    for (int guess = 0; guess < 2; ++guess) {
+      double g = near, d = INFINITY;
+      if (guess || !isfinite(g))
+        if (m->model->ops->curve_project(m->model->ctx, cv, 1, m->xyz + 3 * i, &g) != HOC_OK)
+          break;
+      if (hoc_cad_curve_invert(m->model, c, m->xyz + 3 * i, &g, &d) != HOC_OK) break;
+      if (d <= tol) {
+        *t = g;
+        return 1;
+      }
+    }
+    hoc_error_clear();
+    return 0;
   }
   if (m->dim[i] != HOC_ON_VERTEX) return 0;
   int ok;

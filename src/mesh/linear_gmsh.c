@@ -991,11 +991,21 @@ hoc_status hoc_mesh_generate_linear_with(hoc_model *model, const hoc_linear_opti
     hoc_mesh_destroy(mesh);
     return status;
   }
-  if (!o.grading) return HOC_OK;
-  double budget = HOC_LINEAR_GRADED_GROWTH * (hoc_now() - t0) + HOC_LINEAR_GRADED_SECONDS;
-  HOC_TRY(hoc_mesh_grade(model, &o, algorithm, budget, mesh));
-  /* slivers on the surface that a swap of their edge removes */
-  status = hoc_mesh_swap_edges(*mesh, &(*mesh)->swapped_edges, (*mesh)->swap_min_q);
+  if (o.grading) {
+    double budget = HOC_LINEAR_GRADED_GROWTH * (hoc_now() - t0) + HOC_LINEAR_GRADED_SECONDS;
+    HOC_TRY(hoc_mesh_grade(model, &o, algorithm, budget, mesh));
+    /* slivers on the surface that a swap of their edge removes */
+    status = hoc_mesh_swap_edges(*mesh, &(*mesh)->swapped_edges, (*mesh)->swap_min_q);
+  }
+  /* no triangle across a line of a face that maps to one point */
+  hoc_mesh *cut = NULL;
+  int n_cut = 0;
+  if (status == HOC_OK && !o.keep_pinches) status = hoc_mesh_cut_pinches(*mesh, &cut, &n_cut);
+  if (status == HOC_OK && cut) {
+    cut->cut_pinches = n_cut;
+    hoc_mesh_destroy(mesh);
+    *mesh = cut;
+  }
   if (status != HOC_OK) hoc_mesh_destroy(mesh);
   return status;
 }

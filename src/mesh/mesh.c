@@ -456,16 +456,19 @@ static void nudge_inside(const hoc_cad_face *f, const double *uv, double step, d
  * there is the limit along that element's direction. Both move where both
  * are arbitrary. */
 static void pole_inside(const hoc_cad_face *f, const double *uv, unsigned char pole,
-                        double *out) {
+                        double step, double *out) {
   if ((pole & 3) == 3) {
-    nudge_inside(f, uv, 1e-5, out);
+    nudge_inside(f, uv, step, out);
     return;
   }
   for (int d = 0; d < 2; ++d) {
     double mid = 0.5 * (f->lo[d] + f->hi[d]), range = f->hi[d] - f->lo[d];
+    double way = mid > uv[d] ? 1.0 : (mid < uv[d] ? -1.0 : 0.0);
+    /* a pinch: toward the element's side of it */
+    if (pole & (HOC_POLE_BELOW << d)) way = -1.0;
+    if (pole & (HOC_POLE_ABOVE << d)) way = 1.0;
     out[d] = uv[d];
-    if (!(pole & (1 << d)))
-      out[d] += 1e-5 * range * (mid > uv[d] ? 1.0 : (mid < uv[d] ? -1.0 : 0.0));
+    if (!(pole & (1 << d))) out[d] += step * range * way;
   }
 }
 
@@ -473,7 +476,8 @@ static void pole_inside(const hoc_cad_face *f, const double *uv, unsigned char p
  * du, dv there; at a singular point not flagged as a pole (or a side where
  * a derivative stalls), look just inside the face, farther in until the
  * face is regular there. */
-static hoc_status slot_normal(const hoc_model *model, int f, const double *uv, const double *a,
+static hoc_status slot_normal(const hoc_model *model, int f, const double *uv,
+                              const double *pole_uv, unsigned char pole, const double *a,
                               const double *b, double sign, double *normal) {
   const hoc_cad_face *face = &model->faces[f];
   double c[3];
@@ -481,7 +485,10 @@ static hoc_status slot_normal(const hoc_model *model, int f, const double *uv, c
   if (hoc_cad_face_singular(face, a, b)) {
     double p[2], a2[3], b2[3];
     for (double step = 1e-5; step <= 1.01e-2; step *= 10) {
-      nudge_inside(face, uv, step, p);
+      if (pole & HOC_POLE_SIDES)
+        pole_inside(face, pole_uv, pole, 10 * step, p);
+      else
+        nudge_inside(face, uv, step, p);
       HOC_TRY(hoc_cad_face_eval(model, f, 1, p, NULL, a2, b2));
       hoc_cross3(a2, b2, c);
       if (!hoc_cad_face_singular(face, a2, b2)) break;
@@ -671,13 +678,14 @@ hoc_status hoc_mesh_slot_normals_of(const hoc_mesh *m, const unsigned char *whic
       for (size_t k = 0; k < n; ++k) {
         size_t s = order[a + k];
         if (m->slot_pole[s])
-          pole_inside(face, m->slot_uv + 2 * s, m->slot_pole[s], uv + 2 * k);
+          pole_inside(face, m->slot_uv + 2 * s, m->slot_pole[s], 1e-5, uv + 2 * k);
         else
           memcpy(uv + 2 * k, m->slot_uv + 2 * s, 2 * sizeof *uv);
       }
       hoc_status st = hoc_cad_face_eval(model, f, n, uv, NULL, du, dv);
       for (size_t k = 0; k < n && st == HOC_OK; ++k)
-        st = slot_normal(model, f, uv + 2 * k, du + 3 * k, dv + 3 * k, sign,
+        st = slot_normal(model, f, uv + 2 * k, m->slot_uv + 2 * order[a + k],
+                         m->slot_pole[order[a + k]], du + 3 * k, dv + 3 * k, sign,
                          normal + 3 * order[a + k]);
       hoc_par_error_catch(&err, st);
     }

@@ -7,6 +7,9 @@
 
 #include "cad/cad.h"
 
+/* The side of a pole slot's element at a pinch (hoc_mesh.slot_pole). */
+enum { HOC_POLE_BELOW = 4, HOC_POLE_ABOVE = 16, HOC_POLE_SIDES = 60 };
+
 /* Node classification: the CAD entity a node lies on. */
 enum { HOC_ON_VERTEX = 0, HOC_ON_CURVE = 1, HOC_ON_FACE = 2 };
 
@@ -50,7 +53,10 @@ struct hoc_mesh {
   int *slot_face;       /* [n_slots] */
   double *slot_uv;      /* [n_slots][2] parameters of the node on the face */
   unsigned char *slot_pole; /* [n_slots] bit 0: u is arbitrary here (phi_u = 0), bit 1: v is;
-                               such a slot of a vertex or curve node belongs to one element */
+                               such a slot of a vertex or curve node belongs to one element;
+                               at a pole inside the face's range (a pinch), HOC_POLE_BELOW
+                               or HOC_POLE_ABOVE shifted by the fixed coordinate (0: u, 1:
+                               v) says on which side of it the element lies */
 
   /* 1D elements on CAD curves (the curve edges of the triangles) */
   size_t n_lines;
@@ -76,6 +82,7 @@ struct hoc_mesh {
   double small_min;
   size_t unextended_elements; /* > 0: gmsh's mesh with the curves' sizes extended into the
                                  faces had this many triangles (HOC_LINEAR_UNEXTENDED) */
+  int cut_pinches;          /* pinches the linear mesh is cut along (hoc_mesh_cut_pinches) */
   int timed_out_faces;      /* how many of them gmsh did not finish meshing in
                                mesher_timeout seconds (hoc_linear_options) */
   int known_failed_faces;   /* how many of them were left out from the model's record
@@ -344,6 +351,15 @@ typedef struct hoc_pinch {
 hoc_status hoc_face_pinches(const hoc_model *model, int f, double share, hoc_pinch *pinch, int max,
                            int *n);
 
+/** *s: the largest distance of the image of face f's iso-line (dir 0:
+ *  u = c, 1: v = c) from its first point, over the face's range of the
+ *  other parameter (17 points). */
+hoc_status hoc_face_line_spread(const hoc_model *model, int f, int dir, double c, double *s);
+
+/** Whether a face's surface may pinch: any but the analytic kinds, whose
+ *  degenerate lines are sides of their (u, v) (poles, apexes). */
+int hoc_face_may_pinch(const hoc_cad_face *face);
+
 /** Whether element e's nodes lie on both sides (in their (u, v)) of one of
  *  the n pinches of its face: its curved map passes through the pinch's
  *  point, where its Jacobian vanishes. */
@@ -362,6 +378,24 @@ typedef struct hoc_pinch_table {
 hoc_status hoc_pinch_table_init(hoc_pinch_table *t, const hoc_model *model, double share,
                                 int max);
 void hoc_pinch_table_free(hoc_pinch_table *t);
+
+/** At most this many pinches per face are cut (hoc_mesh_cut_pinches), and
+ *  a node beside a pinch's point closer to it than HOC_CUT_NEAR of its
+ *  longest edge becomes the point (the triangles between it and the point
+ *  reach along the pinch's line, and fold there when curved). */
+#define HOC_CUT_PINCHES 4
+#define HOC_CUT_NEAR 0.1
+
+/** The linear mesh m cut along its faces' pinches (mesh/pinch.c): lines of
+ *  a face's (u, v) that map to one point to within the collapse distance
+ *  (hoc_mesh_collapse_distance), on faces other than the analytic kinds.
+ *  The point becomes a node on the face's boundary curve that crosses the
+ *  line, no triangle lies across the line, and the boundary curves' lines
+ *  through the point (and the triangles beyond them) are split there.
+ *  *out: the cut mesh and *n_cut the pinches cut, or NULL and 0 if none
+ *  (also for a higher order, a line that closes inside its face, or one
+ *  whose crossings lie farther apart). */
+hoc_status hoc_mesh_cut_pinches(const hoc_mesh *m, hoc_mesh **out, int *n_cut);
 
 /** *across: whether element e crosses a pinch of its face (the face
  *  searched through table t if not yet). */

@@ -72,16 +72,32 @@ hoc_status hoc_mesh_split_pole_slots(hoc_mesh *m) {
 }
 
 /* The arbitrary coordinate of each element's pole slot: the element's own
- * (hoc_mesh_element_params), wrapped into the face's range. */
+ * (hoc_mesh_element_params), wrapped into the face's range. At a pole
+ * inside the face's range (a pinch: pinch.c) the element lies on one side
+ * of the pole's line: HOC_POLE_BELOW or HOC_POLE_ABOVE says which. */
 void hoc_mesh_per_element_pole_params(hoc_mesh *m) {
   size_t np = (size_t)m->np;
   for (size_t x = 0; x < m->n_elems * np; ++x) {
     size_t s = m->elem_slot[x];
     if (!pole_slot(m, s)) continue;
+    const hoc_cad_face *f = &m->model->faces[m->slot_face[s]];
     double uv[2] = {m->elem_uv[2 * x], m->elem_uv[2 * x + 1]};
-    hoc_cad_face_wrap(&m->model->faces[m->slot_face[s]], uv);
+    hoc_cad_face_wrap(f, uv);
     for (int d = 0; d < 2; ++d)
       if (m->slot_pole[s] & (1 << d)) m->slot_uv[2 * s + (size_t)d] = uv[d];
+    for (int d = 0; d < 2; ++d) {
+      /* d: the pole line's fixed coordinate */
+      if (!(m->slot_pole[s] & (1 << (1 - d))) || (m->slot_pole[s] & (1 << d))) continue;
+      double at = m->slot_uv[2 * s + (size_t)d], range = f->hi[d] - f->lo[d];
+      if (!(at > f->lo[d] + 1e-9 * range && at < f->hi[d] - 1e-9 * range)) continue;
+      size_t e = x / np;
+      const double *euv = m->elem_uv + 2 * e * np;
+      double mean = 0;
+      for (int k = 0; k < 3; ++k) mean += euv[2 * k + d] / 3;
+      m->slot_pole[s] &= (unsigned char)~((HOC_POLE_BELOW | HOC_POLE_ABOVE) << d);
+      if (mean < at) m->slot_pole[s] |= (unsigned char)(HOC_POLE_BELOW << d);
+      if (mean > at) m->slot_pole[s] |= (unsigned char)(HOC_POLE_ABOVE << d);
+    }
   }
 }
 

@@ -121,6 +121,14 @@ static hoc_status csr_alloc_local(size_t n, size_t total, size_t **start, size_t
   return status;
 }
 
+/* Whether curve node i is at a pole of a face around it: a pinch's point
+ * (mesh/pinch.c), which its curve only passes through: it stays there. */
+static int at_pole(const hoc_opt *o, const hoc_mesh *m, size_t i) {
+  for (uint32_t j = o->adj.ns_start[i]; j < o->adj.ns_start[i + 1]; ++j)
+    if (m->slot_pole[o->adj.ns_slot[j]]) return 1;
+  return 0;
+}
+
 hoc_status hoc_opt_setup(hoc_opt *o, hoc_mesh *m, hoc_measure measure, int fix_curves,
                         const unsigned char *free_elements, int free_rings) {
   memset(o, 0, sizeof *o);
@@ -171,7 +179,8 @@ hoc_status hoc_opt_setup(hoc_opt *o, hoc_mesh *m, hoc_measure measure, int fix_c
   for (size_t i = 0; i < nn; ++i) {
     if (o->adj.ne_start[i + 1] == o->adj.ne_start[i]) continue; /* used by no element */
     if (m->dim[i] == HOC_ON_FACE) o->adj.ndof[i] = 2;
-    else if (m->dim[i] == HOC_ON_CURVE && !fix_curves && !m->model->curves[m->entity[i]].degenerate)
+    else if (m->dim[i] == HOC_ON_CURVE && !fix_curves &&
+             !m->model->curves[m->entity[i]].degenerate && !at_pole(o, m, i))
       o->adj.ndof[i] = 1;
   }
   if (free_elements) HOC_TRY(restrict_free(o, free_elements, free_rings));

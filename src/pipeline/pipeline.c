@@ -201,6 +201,16 @@ static hoc_status note_swapped(const hoc_run *run, const hoc_mesh *lin) {
                        lin->swapped_edges, lin->swap_min_q[0], lin->swap_min_q[1]);
 }
 
+/* Pinches the linear mesh is cut along (mesh/pinch.c). */
+static hoc_status note_cut(const hoc_run *run, const hoc_mesh *lin) {
+  if (!lin->cut_pinches) return HOC_OK;
+  return hoc_run_event(run, HOC_EVENT_NOTE,
+                       "the linear mesh is cut along %d pinch(es): lines of a face's (u, v) "
+                       "that the CAD maps to one point, which is a node, no triangle across "
+                       "the line",
+                       lin->cut_pinches);
+}
+
 /* Triangles the assembly dropped at collapsed sides (mesh/collapse.c). */
 static hoc_status note_collapsed(const hoc_run *run, const hoc_mesh *lin) {
   if (!lin->n_collapsed) return HOC_OK;
@@ -509,6 +519,7 @@ static hoc_status mesh_model_run(hoc_run *run, hoc_model *model, model_meshes *m
     HOC_TRY_GOTO(note_small_faces(run, m->lin), done);
     HOC_TRY_GOTO(note_graded(run, m->lin), done);
     HOC_TRY_GOTO(note_swapped(run, m->lin), done);
+    HOC_TRY_GOTO(note_cut(run, m->lin), done);
     HOC_TRY_GOTO(hoc_run_stage(run, r, "linear", m->lin, t_lin, NULL, NULL), done);
     *final = m->lin;
     if (o->order > 1) {
