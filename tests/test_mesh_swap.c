@@ -14,7 +14,8 @@
  * degrees (the Jacobian is singular there) and the element is tangled at
  * order 2. Every interior edge of a fan is such an edge, so the swaps must
  * leave the fan as it is; the same mesh with that swap made by hand shows
- * the tangle.
+ * the tangle, and the swaps undo it (gmsh makes such triangles along sides
+ * where a face's parametrisation stalls), though the fan's q is lower.
  * SPDX-License-Identifier: GPL-2.0-or-later */
 #include "hocad.h"
 #include "mesh/mesh.h"
@@ -255,6 +256,15 @@ static void disk_fan(hoc_model *model, int ear, int swap, size_t *swapped, doubl
   for (int i = 0; i < N_RIM; ++i)
     face[i] = f;
   hoc_mesh_source src = linear_source(N, xyz, NULL, dim, ent, N_RIM, conn, face);
+  /* the rim's lines given (as gmsh gives them): not inferred from the
+   * edges, which would take the ear's chord for one */
+  size_t lines[2 * N_RIM];
+  int line_curve[N_RIM];
+  for (int i = 0; i < N_RIM; ++i)
+    lines[2 * i] = (size_t)i, lines[2 * i + 1] = (size_t)(i + 1) % N_RIM, line_curve[i] = curve;
+  src.n_lines = N_RIM;
+  src.line_conn = lines;
+  src.line_curve = line_curve;
   swap_and_measure(model, &src, 1e-6, swap, 3, 0, swapped, min_q, min_q3);
 }
 
@@ -262,17 +272,20 @@ static void test_ears(void) {
   hoc_model *model = NULL;
   CHECK_OK(hoc_model_open(DATA "thin_disk.brep", &model));
   if (!model) return;
-  size_t swapped, none;
-  double q_fan, q_fan3, q_ear, q_ear3, q_fan0, q_fan03;
+  size_t swapped, none, unswapped;
+  double q_fan, q_fan3, q_ear, q_ear3, q_fan0, q_fan03, q_back, q_back3;
   disk_fan(model, 0, 0, &none, &q_fan0, &q_fan03);
   disk_fan(model, 0, 1, &swapped, &q_fan, &q_fan3);
   disk_fan(model, 1, 0, &none, &q_ear, &q_ear3);
+  disk_fan(model, 1, 1, &unswapped, &q_back, &q_back3);
   printf("ears: at P0 the fan's min q %.4f (%.4f at order 3), %zu swap(s): %.4f (%.4f); with "
-         "the ear %.4f (%.4f)\n",
-         q_fan0, q_fan03, swapped, q_fan, q_fan3, q_ear, q_ear3);
+         "the ear %.4f (%.4f), %zu swap(s): %.4f (%.4f)\n",
+         q_fan0, q_fan03, swapped, q_fan, q_fan3, q_ear, q_ear3, unswapped, q_back, q_back3);
   /* the swap would raise the linear q at P0, and it tangles when raised */
   CHECK(q_ear > 1.05 * q_fan0 && q_ear3 == 0);
   CHECK(swapped == 0 && q_fan == q_fan0 && q_fan3 > 0.5);
+  /* the ear made by hand is swapped back to the fan */
+  CHECK(unswapped == 1 && fabs(q_back - q_fan0) < 1e-9 && q_back3 > 0.5);
   hoc_model_destroy(&model);
 }
 

@@ -103,13 +103,18 @@ static hoc_status try_swap(swapper *S, hoc_hash *edges, size_t e, int k, size_t 
   size_t s1[3] = {sa, sd, sc}, s2[3] = {sd, sb, sc};
   /* a triangle inverted on the CAD: its face is meshed again with gmsh's
    * other algorithms (pipeline/repair.c), whose mesh of the whole face
-   * serves high orders better than a local swap */
+   * serves high orders better than a local swap; but a triangle with its
+   * three corners on one curve (gmsh makes them along sides where the
+   * face's parametrisation stalls, flat in (u, v)) tangles when raised
+   * whatever its straight q, and goes for any valid pair */
+  int ear = on_one_curve(m, ce) || on_one_curve(m, cf);
   double before = fmin(S->q[e], S->q[f]);
-  if (!(before > 0)) return HOC_OK;
+  if (!ear && !(before > 0)) return HOC_OK;
+  double need = ear ? 0.0 : before * (1 + HOC_LINEAR_SWAP_GAIN);
   double q1 = triangle_q(S, t1, s1);
-  if (!(q1 > before * (1 + HOC_LINEAR_SWAP_GAIN))) return HOC_OK;
+  if (!(q1 > need)) return HOC_OK;
   double q2 = triangle_q(S, t2, s2);
-  if (!(q2 > before * (1 + HOC_LINEAR_SWAP_GAIN))) return HOC_OK;
+  if (!(q2 > need)) return HOC_OK;
   if (on_one_curve(m, t1) || on_one_curve(m, t2)) return HOC_OK;
   /* d's parameters as e unwraps them (across a seam f's may differ by a
    * period): shifted by a's offset between the two */
@@ -127,7 +132,7 @@ static hoc_status try_swap(swapper *S, hoc_hash *edges, size_t e, int k, size_t 
   HOC_TRY(curved_q(S, face, t2, s2, u2, &c_2));
   HOC_TRY(curved_q(S, face, ce, se, u_e, &c_e));
   HOC_TRY(curved_q(S, face, cf, sf, u_f, &c_f));
-  if (!(fmin(c_1, c_2) >= fmin(c_e, c_f))) return HOC_OK;
+  if (!(fmin(c_1, c_2) >= fmin(c_e, c_f) || (ear && fmin(c_1, c_2) > 0))) return HOC_OK;
   for (int i = 0; i < 3; ++i) {
     ce[i] = t1[i];
     se[i] = s1[i];
