@@ -159,10 +159,12 @@ void hoc_linear_sizes(const hoc_model *model, const hoc_linear_options *options,
  *  their edges, gmsh meshes the model a second time with sizes graded down
  *  to them, and that mesh is kept if it is better (docs/cli.md, `hocad
  *  mesh` rule 10); then edges are swapped where that raises the smaller q
- *  of their two triangles, straight and curved (rule 11). A face under
- *  the default minimum size that gmsh leaves empty has the mesh made again
- *  with the minimum lowered for it (rule 12). Faces the kernel
- *  cannot mesh, or
+ *  of their two triangles, straight and curved, or removes a triangle
+ *  with its corners on one curve (rule 11). A face under the default
+ *  minimum size that gmsh leaves empty has the mesh made again with the
+ *  minimum lowered for it (rule 12). The mesh is cut along lines of a
+ *  face's (u, v) that map to one point (rule 13; unless
+ *  options->keep_pinches). Faces the kernel cannot mesh, or
  *  on which its mesher crashes, are skipped and counted in
  *  hoc_mesh_num_failed_faces(); HOC_ERR_MESH if it crashes on the curves
  *  or on every face, HOC_ERR_INTERRUPTED if the child is interrupted

@@ -12,6 +12,10 @@
  *   no element across it, the point a node with pole slots; gmsh's mesh
  *   (keep_pinches) has elements across. At order 5 the cut mesh ends
  *   valid and within 0.9 x the linear mesh's min q.
+ * - surf114's face 1, cut at its pinch, past which it turns back: at
+ *   order 3, no split, none tangled (the point's slots on the flap's side
+ *   take the flap's normal, and the point stays where it is; without
+ *   either, 2 tangled).
  * - From gmsh's mesh, not cut, elements end below 0.9 x the linear mesh's
  *   min q at order 5, every one of them across the pinch, and the note
  *   says so.
@@ -134,6 +138,36 @@ static void test_cut(void) {
   hoc_model_destroy(&model);
 }
 
+/* surf114's face 1 (an IGES spline surface) pinches at u = 7.64 and turns
+ * back past it (a flap 0.1 wide): cut there, the elements on the flap's
+ * side see the flap's normal at the point (HOC_POLE_ABOVE: taken toward
+ * u = 8, not toward the face's middle), and at order 3 none is tangled,
+ * without any split or remeshing. */
+static void test_flap(void) {
+  hoc_model *model = NULL;
+  CHECK_OK(hoc_model_open(DATA "surf114_face1.brep", &model));
+  if (!model) return;
+  hoc_mesh_options o;
+  hoc_mesh_options_default(&o);
+  o.order = 3;
+  o.refinements = 0;
+  hoc_mesh *mesh = NULL;
+  hoc_report *r = NULL;
+  CHECK_OK(hoc_mesh_model(model, &o, &mesh, &r));
+  if (mesh && r) {
+    size_t above = 0;
+    for (size_t s = 0; s < mesh->n_slots; ++s)
+      above += (mesh->slot_pole[s] & HOC_POLE_ABOVE) != 0;
+    const hoc_stage *last = hoc_report_stage(r, hoc_report_num_stages(r) - 1);
+    printf("surf114's face 1 at order 3: %zu pole slot(s) on the flap's side, %zu tangled\n",
+           above, last->stats.tangled);
+    CHECK(above > 0 && last->stats.tangled == 0);
+  }
+  hoc_report_destroy(&r);
+  hoc_mesh_destroy(&mesh);
+  hoc_model_destroy(&model);
+}
+
 /* The note on poor elements across a pinch, from a linear mesh not cut. */
 static void test_note(void) {
   hoc_model *model = NULL;
@@ -229,6 +263,7 @@ int main(void) {
   test_analytic();
   test_files();
   test_cut();
+  test_flap();
   test_note();
   test_unrefinable();
   return test_report();

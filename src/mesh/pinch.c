@@ -566,17 +566,21 @@ hoc_status hoc_mesh_cut_pinches(const hoc_mesh *m, hoc_mesh **out, int *n_cut) {
   HOC_ALLOC_GOTO(line, (size_t)nf * HOC_CUT_PINCHES + 1, done);
   for (size_t e = 0; e < m->n_elems; ++e) used[m->elem_face[e]] = 1;
   double tol = hoc_mesh_collapse_distance(model);
+  /* the search: about 3 000 evaluations per face, the faces in parallel */
+  hoc_par_error err = {0};
+#pragma omp parallel for schedule(dynamic, 1) if (nf > 1 && model->thread_safe)
   for (int f = 0; f < nf; ++f) {
     const hoc_cad_face *face = &model->faces[f];
     if (!used[f] || !hoc_face_may_pinch(face)) continue;
     double size = 0;
     for (int k = 0; k < 3; ++k) size = fmax(size, face->bbox[k + 3] - face->bbox[k]);
     if (!(size > tol)) continue;
-    HOC_TRY_GOTO(hoc_face_pinches(model, f, tol / size, line + (size_t)f * HOC_CUT_PINCHES,
-                                  HOC_CUT_PINCHES, &count[f]),
-                 done);
-    total += count[f];
+    hoc_par_error_catch(&err, hoc_face_pinches(model, f, tol / size,
+                                               line + (size_t)f * HOC_CUT_PINCHES,
+                                               HOC_CUT_PINCHES, &count[f]));
   }
+  HOC_TRY_GOTO(hoc_par_error_raise(&err), done);
+  for (int f = 0; f < nf; ++f) total += count[f];
   if (!total) goto done;
   HOC_TRY_GOTO(cutter_init(&C, m, (size_t)total), done);
   for (int f = 0; f < nf; ++f) {
