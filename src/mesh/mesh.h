@@ -196,6 +196,12 @@ void hoc_mesh_element_params(hoc_mesh *m);
  *  parameter, wrapped into the face's range. */
 void hoc_mesh_per_element_pole_params(hoc_mesh *m);
 
+/** After the optimiser moved nodes: each pole slot's arbitrary coordinate
+ *  follows its element's other corners again (the mean of theirs, as
+ *  hoc_mesh_element_params sets it), so that the mesh measures as it does
+ *  when read back. At an apex or a pinch the normal there depends on it. */
+void hoc_mesh_pole_params_follow(hoc_mesh *m);
+
 /** Allocate an empty mesh with its arrays for the given sizes. */
 hoc_status hoc_mesh_alloc(hoc_model *model, int order, size_t n_nodes, size_t n_elems,
                           hoc_mesh **mesh);

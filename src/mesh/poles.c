@@ -101,6 +101,29 @@ void hoc_mesh_per_element_pole_params(hoc_mesh *m) {
   }
 }
 
+void hoc_mesh_pole_params_follow(hoc_mesh *m) {
+  size_t np = (size_t)m->np;
+  for (size_t e = 0; e < m->n_elems; ++e) {
+    const size_t *sl = m->elem_slot + e * np;
+    double *uv = m->elem_uv + 2 * e * np;
+    for (int k = 0; k < 3; ++k) {
+      if (!pole_slot(m, sl[k])) continue;
+      for (int d = 0; d < 2; ++d) {
+        if (!(m->slot_pole[sl[k]] & (1 << d))) continue;
+        double sum = 0;
+        int cnt = 0;
+        for (int j = 0; j < 3; ++j)
+          if (j != k && !(m->slot_pole[sl[j]] & (1 << d))) {
+            sum += uv[2 * j + d];
+            ++cnt;
+          }
+        if (cnt) uv[2 * k + d] = sum / cnt;
+      }
+    }
+  }
+  hoc_mesh_per_element_pole_params(m);
+}
+
 /* Element parameters, unwrapped around a regular node of the element; pole
  * nodes take the mean of the element's regular vertices in the arbitrary
  * coordinate. */

@@ -152,6 +152,8 @@ hoc_status hoc_mesh_optimize_rules(hoc_mesh *mesh, const hoc_optimize_options *o
       if (status == HOC_OK) status = restored;
     }
   }
+  /* the pole slots' directions as the moved corners set them */
+  if (status == HOC_OK) hoc_mesh_pole_params_follow(mesh);
   a.seconds = hoc_now() - t0;
   hoc_opt_snapshot_free(&start);
   hoc_opt_snapshot_free(&first);
