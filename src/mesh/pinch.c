@@ -1,5 +1,5 @@
-/* Pinches: iso-lines inside a face's (u, v) whose image is one point, and
- * the elements across them.
+/* Pinches: iso-lines inside a face's (u, v) whose image is one point, the
+ * elements across them, and the cut of a linear mesh along them.
  * SPDX-License-Identifier: GPL-2.0-or-later
  *
  * A B-spline patch whose control row collapses to a point inside it (a
@@ -7,7 +7,8 @@
  * maps a whole line u = c (or v = c) to that point. An element whose
  * (u, v) crosses the line is curved through the point: its Jacobian
  * vanishes along the line inside it, and the more nodes it has there, the
- * closer its q comes to 0. Only a mesh with nodes on the line avoids it. */
+ * closer its q comes to 0. Only a mesh with nodes on the line avoids it:
+ * hoc_mesh_cut_pinches (below) makes one. */
 #include "core/geometry.h"
 #include "mesh/mesh.h"
 

@@ -101,26 +101,29 @@ void hoc_mesh_per_element_pole_params(hoc_mesh *m) {
   }
 }
 
-void hoc_mesh_pole_params_follow(hoc_mesh *m) {
-  size_t np = (size_t)m->np;
-  for (size_t e = 0; e < m->n_elems; ++e) {
-    const size_t *sl = m->elem_slot + e * np;
-    double *uv = m->elem_uv + 2 * e * np;
-    for (int k = 0; k < 3; ++k) {
-      if (!pole_slot(m, sl[k])) continue;
-      for (int d = 0; d < 2; ++d) {
-        if (!(m->slot_pole[sl[k]] & (1 << d))) continue;
-        double sum = 0;
-        int cnt = 0;
-        for (int j = 0; j < 3; ++j)
-          if (j != k && !(m->slot_pole[sl[j]] & (1 << d))) {
-            sum += uv[2 * j + d];
-            ++cnt;
-          }
-        if (cnt) uv[2 * k + d] = sum / cnt;
-      }
+/* Each pole node of an element (slots sl, parameters uv) takes the mean of
+ * the element's regular vertices in its arbitrary coordinate. */
+static void pole_means(const hoc_mesh *m, const size_t *sl, double *uv) {
+  for (int k = 0; k < m->np; ++k) {
+    unsigned char pole = m->slot_pole[sl[k]];
+    for (int d = 0; d < 2; ++d) {
+      if (!(pole & (1 << d))) continue;
+      double sum = 0;
+      int cnt = 0;
+      for (int j = 0; j < 3; ++j)
+        if (j != k && !(m->slot_pole[sl[j]] & (1 << d))) {
+          sum += uv[2 * j + d];
+          ++cnt;
+        }
+      if (cnt) uv[2 * k + d] = sum / cnt;
     }
   }
+}
+
+void hoc_mesh_pole_params_follow(hoc_mesh *m) {
+  size_t np = (size_t)m->np;
+  for (size_t e = 0; e < m->n_elems; ++e)
+    pole_means(m, m->elem_slot + e * np, m->elem_uv + 2 * e * np);
   hoc_mesh_per_element_pole_params(m);
 }
 
@@ -146,19 +149,6 @@ void hoc_mesh_element_params(hoc_mesh *m) {
       uv[2 * k + 1] = m->slot_uv[2 * sl[k] + 1];
       hoc_cad_face_unwrap_near(f, ref, uv + 2 * k);
     }
-    for (int k = 0; k < np; ++k) {
-      unsigned char pole = m->slot_pole[sl[k]];
-      for (int d = 0; d < 2; ++d) {
-        if (!(pole & (1 << d))) continue;
-        double sum = 0;
-        int cnt = 0;
-        for (int j = 0; j < 3; ++j)
-          if (j != k && !(m->slot_pole[sl[j]] & (1 << d))) {
-            sum += uv[2 * j + d];
-            ++cnt;
-          }
-        if (cnt) uv[2 * k + d] = sum / cnt;
-      }
-    }
+    pole_means(m, sl, uv);
   }
 }
