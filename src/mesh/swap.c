@@ -104,11 +104,11 @@ static hoc_status try_swap(swapper *S, hoc_hash *edges, size_t e, int k, size_t 
   /* a triangle inverted on the CAD: its face is meshed again with gmsh's
    * other algorithms (pipeline/repair.c), whose mesh of the whole face
    * serves high orders better than a local swap; but a triangle with its
-   * three corners on one curve (gmsh makes them along sides where the
-   * face's parametrisation stalls, flat in (u, v)) tangles when raised
-   * whatever its straight q, and goes for any valid pair */
-  int ear = on_one_curve(m, ce) || on_one_curve(m, cf);
+   * three corners on one curve, inverted there (gmsh makes them along
+   * sides where the face's parametrisation stalls, flat in (u, v), and
+   * across a concave curve), goes for any valid pair */
   double before = fmin(S->q[e], S->q[f]);
+  int ear = !(before > 0) && (on_one_curve(m, ce) || on_one_curve(m, cf));
   if (!ear && !(before > 0)) return HOC_OK;
   double need = ear ? 0.0 : before * (1 + HOC_LINEAR_SWAP_GAIN);
   double q1 = triangle_q(S, t1, s1);
