@@ -106,6 +106,23 @@ hoc_status hoc_mesh_copy_failed(const hoc_mesh *from, hoc_mesh *to) {
   return HOC_OK;
 }
 
+hoc_status hoc_mesh_copy_record(const hoc_mesh *from, hoc_mesh *to) {
+  HOC_TRY(hoc_mesh_copy_failed(from, to));
+  to->n_collapsed = from->n_collapsed;
+  to->graded_curves = from->graded_curves;
+  to->graded_faces = from->graded_faces;
+  to->ungraded_elements = from->ungraded_elements;
+  to->ungraded_min_q = from->ungraded_min_q;
+  to->graded_budget = from->graded_budget;
+  to->swapped_edges = from->swapped_edges;
+  memcpy(to->swap_min_q, from->swap_min_q, sizeof to->swap_min_q);
+  to->small_faces = from->small_faces;
+  to->small_min = from->small_min;
+  to->unextended_elements = from->unextended_elements;
+  to->cut_pinches = from->cut_pinches;
+  return HOC_OK;
+}
+
 void hoc_mesh_destroy(hoc_mesh **mesh) {
   if (!mesh || !*mesh) return;
   hoc_mesh *m = *mesh;

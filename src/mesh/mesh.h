@@ -185,6 +185,11 @@ hoc_status hoc_mesh_move_nodes(hoc_mesh *m, const unsigned char *which, int *at_
  *  timed out) given to `to`, a mesh raised or split from it. */
 hoc_status hoc_mesh_copy_failed(const hoc_mesh *from, hoc_mesh *to);
 
+/** The whole record of how `from` was meshed (its failed faces and every
+ *  field the pipeline's notes read: collapsed, graded, swapped, small
+ *  faces, unextended, cut pinches) given to `to`, the same mesh rebuilt. */
+hoc_status hoc_mesh_copy_record(const hoc_mesh *from, hoc_mesh *to);
+
 /* Steps of hoc_mesh_assemble once the slots are built (poles.c), in order. */
 /** One slot per element at each pole slot shared with other faces: the
  *  first element keeps it, each further one gets a copy. */

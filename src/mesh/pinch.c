@@ -528,23 +528,8 @@ static hoc_status cutter_assemble(cutter *C, hoc_mesh **out) {
   src.line_curve = C->line_curve;
   src.face_orient = m->face_orient;
   HOC_TRY_GOTO(hoc_mesh_assemble(m->model, &src, INFINITY, out), done);
-  status = hoc_mesh_copy_failed(m, *out);
-  if (status != HOC_OK) {
-    hoc_mesh_destroy(out);
-    goto done;
-  }
-  hoc_mesh *o = *out;
-  o->n_collapsed = m->n_collapsed;
-  o->graded_curves = m->graded_curves;
-  o->graded_faces = m->graded_faces;
-  o->ungraded_elements = m->ungraded_elements;
-  o->ungraded_min_q = m->ungraded_min_q;
-  o->graded_budget = m->graded_budget;
-  o->swapped_edges = m->swapped_edges;
-  memcpy(o->swap_min_q, m->swap_min_q, sizeof o->swap_min_q);
-  o->small_faces = m->small_faces;
-  o->small_min = m->small_min;
-  o->unextended_elements = m->unextended_elements;
+  status = hoc_mesh_copy_record(m, *out);
+  if (status != HOC_OK) hoc_mesh_destroy(out);
 done:
   free(remap);
   return status;
