@@ -610,7 +610,8 @@ typedef struct hoc_mesh_options {
                                hoc_mesh_repair; 0: none); on faces that fold (their normal
                                reverses inside them) or at CAD cusps hoc_mesh_model makes
                                one split per chain and no remeshing, and no split if
-                               each tangled element crosses a fold or is at a cusp */
+                               each tangled element crosses a fold (not at a neck, an
+                               iso-line with a short image) or is at a cusp */
   int keep_nodes;         /**< hoc_mesh_repair: optimise from the input's own high-order
                                nodes only, never from nodes re-placed from its corners */
   int equispaced;         /**< hoc_mesh_model: the result converted to equispaced nodes, what
@@ -655,8 +656,8 @@ typedef struct hoc_report hoc_report;
  *  their faces fold or they have a corner at a CAD cusp) their split on a copy
  *  (as hoc_mesh_repair splits), kept if it leaves none tangled (at folds and
  *  cusps, which no finer mesh opens: the fewest tangled kept, no
- *  remeshing, and no split where each element crosses a fold or is at a
- *  cusp itself); else their faces meshed again with
+ *  remeshing, and no split where each element crosses a fold, not at a
+ *  neck, or is at a cusp itself); else their faces meshed again with
  *  edges half as long and (unless options->size_min is set) a minimum
  *  size ten times smaller, unless that more than quadruples the mesh,
  *  and everything again, at

@@ -26,6 +26,12 @@
  *   turned over) is one no split or finer mesh opens: its face is
  *   HOC_UNREFINABLE_PINCHES, and, the only one tangled, it is EACH; the
  *   same element turned over away from the pinch is neither.
+ * - surf114's face 3 at the whole model's sizes, order 2: the one element
+ *   left tangled spans a neck (u = 0.62, whose iso-line spreads 0.046 on a
+ *   face 90 across: more than the collapse distance, less than the
+ *   pinch share), where the face turns back (phi_v reverses: a fold). Its
+ *   face folds, but it is not EACH: one split opens it (0 tangled, as the
+ *   whole model at order 2); counted as across a fold, it stays tangled.
  * SPDX-License-Identifier: GPL-2.0-or-later */
 #include "hocad.h"
 #include "mesh/mesh.h"
@@ -300,6 +306,39 @@ static void test_unrefinable(void) {
   hoc_model_destroy(&model);
 }
 
+static void test_neck(void) {
+  hoc_model *model = NULL;
+  CHECK_OK(hoc_model_open(DATA "surf114_face3.brep", &model));
+  if (!model) return;
+  hoc_run run = {0};
+  hoc_mesh_options_default(&run.o);
+  run.o.order = 2;
+  run.o.size = 8.1146; /* surf114.igs's default sizes (its diagonal / 20) */
+  run.o.size_min = 0.81146;
+  int why[2] = {-1, -1};
+  size_t tangled[2] = {SIZE_MAX, SIZE_MAX}, made = 0;
+  for (int k = 0; k < 2; ++k) {
+    hoc_mesh_options o = run.o;
+    o.refinements = k ? -1 : 0;
+    hoc_mesh *mesh = NULL;
+    hoc_report *r = NULL;
+    CHECK_OK(hoc_mesh_model(model, &o, &mesh, &r));
+    if (mesh && r) {
+      tangled[k] = hoc_report_tangled(r);
+      if (!k) CHECK_OK(hoc_repair_tangled_unrefinable(&run, mesh, &why[k]));
+      if (k) made = (size_t)hoc_report_refinements(r);
+    }
+    hoc_report_destroy(&r);
+    hoc_mesh_destroy(&mesh);
+  }
+  printf("surf114's face 3 at order 2: %zu tangled unsplit (unrefinable %d), %zu after %zu "
+         "split(s)\n",
+         tangled[0], why[0], tangled[1], made);
+  CHECK(tangled[0] > 0 && tangled[0] != SIZE_MAX && why[0] == HOC_UNREFINABLE_FOLDS);
+  CHECK(tangled[1] == 0 && made > 0);
+  hoc_model_destroy(&model);
+}
+
 int main(void) {
   test_analytic();
   test_files();
@@ -307,5 +346,6 @@ int main(void) {
   test_flap();
   test_note();
   test_unrefinable();
+  test_neck();
   return test_report();
 }

@@ -378,9 +378,11 @@ int hoc_mesh_element_crosses_pinch(const hoc_mesh *mesh, size_t e, const hoc_pin
                                    int n);
 
 /** The pinches of a model's faces, searched on first use (each face's at
- *  most once): hoc_face_pinches with `share` and up to `max` per face. */
+ *  most once): hoc_face_pinches with `share` and up to `max` per face;
+ *  with spread > 0 (0 after init) only lines whose image spreads less than
+ *  that too (the share of each face's size lowered to it). */
 typedef struct hoc_pinch_table {
-  double share;
+  double share, spread;
   int max;
   int *n;          /* [n_faces] pinches found, -1: not searched yet */
   hoc_pinch *line; /* [n_faces][max] */

@@ -21,6 +21,14 @@
  * section steps that find the narrowest line near each probed minimum. */
 enum { LINES = 64, ALONG = 17, REFINE = 40 };
 
+/* The largest side of a face's box. */
+static double face_size(const hoc_cad_face *face) {
+  double size = 0;
+  for (int k = 0; k < 3; ++k)
+    size = fmax(size, face->bbox[k + 3] - face->bbox[k]);
+  return size;
+}
+
 /* The largest distance of the image of face f's iso-line (dir 0: u = c,
  * 1: v = c) from its first point, over the face's range of the other
  * parameter. */
@@ -45,10 +53,7 @@ hoc_status hoc_face_pinches(const hoc_model *model, int f, double share, hoc_pin
             HOC_ERR_ARGUMENT, "pinch search: bad argument");
   *n = 0;
   const hoc_cad_face *face = &model->faces[f];
-  double size = 0;
-  for (int k = 0; k < 3; ++k)
-    size = fmax(size, face->bbox[k + 3] - face->bbox[k]);
-  double tol = share * size;
+  double tol = share * face_size(face);
   for (int dir = 0; dir < 2; ++dir) {
     double lo = face->lo[dir], hi = face->hi[dir], h = (hi - lo) / LINES, s[LINES + 1];
     if (!(hi > lo)) continue;
@@ -112,6 +117,7 @@ hoc_status hoc_pinch_table_init(hoc_pinch_table *t, const hoc_model *model, doub
   HOC_CHECK(t && model && share > 0 && max > 0, HOC_ERR_ARGUMENT, "pinch table: bad argument");
   size_t nf = (size_t)model->n_faces;
   t->share = share;
+  t->spread = 0;
   t->max = max;
   t->n = hoc_calloc(nf + 1, sizeof *t->n);
   t->line = hoc_calloc(nf * (size_t)max + 1, sizeof *t->line);
@@ -136,7 +142,11 @@ hoc_status hoc_mesh_element_across_pinch(const hoc_mesh *mesh, size_t e, hoc_pin
                                          int *across) {
   int f = mesh->elem_face[e];
   hoc_pinch *line = t->line + (size_t)f * (size_t)t->max;
-  if (t->n[f] < 0) HOC_TRY(hoc_face_pinches(mesh->model, f, t->share, line, t->max, &t->n[f]));
+  if (t->n[f] < 0) {
+    double share = t->share, size = face_size(&mesh->model->faces[f]);
+    if (t->spread > 0 && size > 0) share = fmin(share, t->spread / size);
+    HOC_TRY(hoc_face_pinches(mesh->model, f, share, line, t->max, &t->n[f]));
+  }
   *across = hoc_mesh_element_crosses_pinch(mesh, e, line, t->n[f]);
   return HOC_OK;
 }
@@ -558,8 +568,7 @@ hoc_status hoc_mesh_cut_pinches(const hoc_mesh *m, hoc_mesh **out, int *n_cut) {
   for (int f = 0; f < nf; ++f) {
     const hoc_cad_face *face = &model->faces[f];
     if (!used[f] || !hoc_face_may_pinch(face)) continue;
-    double size = 0;
-    for (int k = 0; k < 3; ++k) size = fmax(size, face->bbox[k + 3] - face->bbox[k]);
+    double size = face_size(face);
     if (!(size > tol)) continue;
     hoc_par_error_catch(&err, hoc_face_pinches(model, f, tol / size,
                                                line + (size_t)f * HOC_CUT_PINCHES,

@@ -274,10 +274,10 @@ hoc_status hoc_repair_linear(const hoc_run *run, hoc_model *model, const hoc_lin
  *   elements across folds of faces 1, 3 and 4; splitting the inverted ones
  *   twice makes 148);
  * - or has a tangled element across a pinch of the face (hoc_face_pinches:
- *   a line of its (u, v) that maps to one point). A split's children cross
- *   the line again, and a finer mesh crosses it with more elements: only
- *   nodes on the line avoid them (surf114.igs at order 3: 11 tangled, each
- *   across a pinch, 10 of them across a fold too);
+ *   a line of its (u, v) that maps to one point, within the collapse
+ *   distance). A split's children cross the line again, and a finer mesh
+ *   crosses it with more elements: only nodes on the line avoid them
+ *   (pinched_sheet's mesh not cut, hoc_mesh_cut_pinches);
  * - or has all its tangled elements at a CAD cusp, where two curves meet
  *   under HOC_PIPELINE_CUSP_DEGREES (hoc_mesh_elements_at_cusps: a corner
  *   there, or next to such an element across the gap between the curves).
@@ -286,7 +286,10 @@ hoc_status hoc_repair_linear(const hoc_run *run, hoc_model *model, const hoc_lin
  *   with one sweep: 3 tangled at its cusps; remeshing gives 8, then 6).
  * These faces are never meshed again finer. HOC_UNREFINABLE_EACH is set
  * too where each tangled element itself crosses a fold or a pinch, or is
- * at a cusp:
+ * at a cusp, and none crosses a neck (a line whose image spreads less than
+ * HOC_PIPELINE_PINCH_SHARE of the face but more than the collapse
+ * distance: a fold along it has an image as short, and a split's children
+ * meet it at a node; surf114_face3.brep at order 2, tests/test_mesh_pinch.c):
  * those are not split either (crescent_plate at order 10: a split per
  * chain took 372 s and left the same 5 tangled; surf114.igs at order 5:
  * 54 s, no fewer). A split serves the others: the element next to a fold

@@ -690,13 +690,18 @@ hoc_status hoc_repair_tangled_unrefinable(const hoc_run *run, const hoc_mesh *me
   size_t ne = hoc_mesh_num_elements(mesh);
   int nf = mesh->model->n_faces;
   unsigned char *tangled = NULL, *state = NULL, *at_cusp = NULL;
-  hoc_pinch_table pinches = {0};
+  /* pinches: lines that map to one point (within the collapse distance);
+   * necks: lines whose image is short (HOC_PIPELINE_PINCH_SHARE) */
+  hoc_pinch_table pinches = {0}, necks = {0};
   hoc_status status = HOC_OK;
   HOC_ALLOC_GOTO(tangled, ne, done);
   HOC_ALLOC_GOTO(at_cusp, ne + 1, done);
   HOC_ALLOC_GOTO(state, (size_t)nf + 1, done);
   HOC_TRY_GOTO(
       hoc_pinch_table_init(&pinches, mesh->model, HOC_PIPELINE_PINCH_SHARE, HOC_PINCHES), done);
+  pinches.spread = hoc_mesh_collapse_distance(mesh->model);
+  HOC_TRY_GOTO(
+      hoc_pinch_table_init(&necks, mesh->model, HOC_PIPELINE_PINCH_SHARE, HOC_PINCHES), done);
   HOC_TRY_GOTO(hoc_mesh_measure(mesh, run->o.measure, NULL, tangled, NULL), done);
   HOC_TRY_GOTO(hoc_mesh_elements_at_cusps(mesh, HOC_PIPELINE_CUSP_DEGREES, tangled, at_cusp),
                done);
@@ -704,12 +709,15 @@ hoc_status hoc_repair_tangled_unrefinable(const hoc_run *run, const hoc_mesh *me
   for (size_t e = 0; e < ne; ++e) {
     if (!tangled[e]) continue;
     any = 1;
-    int f = mesh->elem_face[e], folds = 0, pinch = 0;
+    int f = mesh->elem_face[e], folds = 0, pinch = 0, neck = 0;
     state[f] |= TANGLED | (at_cusp[e] ? 0 : OFF_CUSP);
     if (at_cusp[e]) continue;
     HOC_TRY_GOTO(hoc_mesh_element_across_pinch(mesh, e, &pinches, &pinch), done);
     if (pinch) state[f] |= PINCHED;
-    if (each && !pinch) HOC_TRY_GOTO(hoc_mesh_element_folds(mesh, e, &folds), done);
+    /* across a neck, a fold's image is short: a split's children meet it
+     * at a node (surf114_face3.brep) */
+    if (each && !pinch) HOC_TRY_GOTO(hoc_mesh_element_across_pinch(mesh, e, &necks, &neck), done);
+    if (each && !pinch && !neck) HOC_TRY_GOTO(hoc_mesh_element_folds(mesh, e, &folds), done);
     each = each && (pinch || folds);
   }
   for (size_t e = 0; e < ne; ++e) {
@@ -732,6 +740,7 @@ hoc_status hoc_repair_tangled_unrefinable(const hoc_run *run, const hoc_mesh *me
   *why = any ? kinds | (each ? HOC_UNREFINABLE_EACH : 0) : 0;
 done:
   hoc_pinch_table_free(&pinches);
+  hoc_pinch_table_free(&necks);
   free(tangled);
   free(state);
   free(at_cusp);
