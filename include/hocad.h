@@ -628,8 +628,9 @@ typedef struct hoc_mesh_options {
   int grading;            /**< hoc_mesh_model: hoc_linear_options.grading (default 1) */
   double repair_time;     /**< where elements stay tangled after the first optimisation: the
                                seconds its repairs (remeshings, splits, their optimisations)
-                               may take; past them the optimisation under way stops at its
-                               best state, no repair starts, and the attempt with the fewest
+                               may take; past them the optimisation (or gmsh's mesher,
+                               remeshing) under way stops, no repair starts, and the
+                               attempt with the fewest
                                tangled elements is kept (0, the default: 4 x the time to the
                                first optimised mesh + 60 s; negative: no bound) */
 } hoc_mesh_options;

@@ -191,6 +191,35 @@ static void test_mesher_timeout(void) {
   hoc_model_destroy(&model);
 }
 
+/* A meshing with a deadline (a remeshing among the repairs, whose time
+ * is counted): the fin's face that never ends stops the meshing at the
+ * deadline, with no face probed (that would take the time again per
+ * face) nor remembered as failed (a face that does not finish in what is
+ * left of a budget is no face gmsh cannot mesh). A deadline passed fails
+ * at once. */
+static void test_mesher_deadline(void) {
+  hoc_model *model = NULL;
+  CHECK_OK(hoc_model_open(DATA "wing_rounded_te.brep", &model));
+  if (!model) return;
+  hoc_linear_options o;
+  hoc_linear_options_default(&o);
+  o.order = 2;
+  for (int passed = 0; passed < 2; ++passed) {
+    double t0 = hoc_now();
+    model->mesher_deadline = t0 + (passed ? -1.0 : 2.0);
+    hoc_mesh *m = NULL;
+    CHECK_STATUS(hoc_mesh_generate_linear(model, &o, &m), HOC_ERR_MESH);
+    double took = hoc_now() - t0;
+    printf("wing, deadline %s: %.2f s, \"%s\"\n", passed ? "passed" : "in 2 s", took,
+           hoc_last_error());
+    CHECK(!m && took < (passed ? 0.5 : 3.5));
+    CHECK(strstr(hoc_last_error(), passed ? "no time left" : "left to the repairs") != NULL);
+    CHECK(model->mesher_failed == NULL);
+    CHECK(no_children());
+  }
+  hoc_model_destroy(&model);
+}
+
 /* Every signal disposition of this process, to compare before and after. */
 enum { N_SIGNALS = 32 };
 static void dispositions(struct sigaction *sa) {
@@ -254,6 +283,7 @@ int main(void) {
   test_import_crash();
   test_mesher_crash();
   test_child_idle_limit();
+  test_mesher_deadline();
   test_mesher_timeout();
 
   /* the library still works in this process, and makes the same mesh */

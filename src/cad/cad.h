@@ -115,6 +115,10 @@ struct hoc_model {
    * (it did not finish within mesher_limit[f] seconds). */
   unsigned char *mesher_failed;
   double *mesher_limit;
+  /* hoc_now() past which gmsh's mesher is stopped (0: none), set by a
+   * caller whose meshing has a time budget (a remeshing among repairs): a
+   * meshing it stops fails, no face probed or remembered as failed. */
+  double mesher_deadline;
 };
 
 /** hoc_model.mesher_failed of a face gmsh's mesher did not finish in time. */

@@ -624,6 +624,16 @@ static hoc_status generate_once(hoc_model *model, const hoc_linear_options *opti
   double timeout = o.mesher_timeout < 0 ? 0 : o.mesher_timeout > 0 ? o.mesher_timeout
                                                                    : HOC_MESHER_TIMEOUT;
   if (grading && budget > 0 && (timeout <= 0 || budget < timeout)) timeout = budget;
+  int by_deadline = 0; /* the time left to the model's mesher deadline is the limit */
+  if (model->mesher_deadline > 0) {
+    double left = model->mesher_deadline - hoc_now();
+    HOC_CHECK(left > 0, HOC_ERR_MESH, "no time left for gmsh's mesher (the repairs' time is "
+                                      "spent)");
+    if (timeout <= 0 || left < timeout) {
+      timeout = left;
+      by_deadline = 1;
+    }
+  }
   unsigned char *skip = NULL;
   int n_skipped = 0;
   HOC_TRY_GOTO(known_failures(model, timeout, &skip, &n_skipped), done);
@@ -633,6 +643,12 @@ static hoc_status generate_once(hoc_model *model, const hoc_linear_options *opti
   }
   run_outcome run = run_mesher(model, algorithm, timeout, skip, NULL, NULL, &p, &err, &end);
   if (grading && run == RUN_CRASHED && timed_out) *timed_out = end.signal == FACE_TIMED_OUT;
+  if (by_deadline && run == RUN_CRASHED && end.signal == FACE_TIMED_OUT) {
+    status = HOC_ERROR(HOC_ERR_MESH, "gmsh's mesher did not finish in the %.3g s left to the "
+                                     "repairs (--repair-time)",
+                       timeout);
+    goto done;
+  }
   if (!grading && run == RUN_CRASHED && !hoc_signal_is_interrupt(end.signal) &&
       model->n_faces > 1) {
     /* mesh the faces that neither crash gmsh nor keep it from finishing

@@ -512,7 +512,41 @@ static hoc_status mesh_model_run(hoc_run *run, hoc_model *model, model_meshes *m
   for (;;) {
     lo.face_size = face_size;
     double t0 = hoc_now();
-    HOC_TRY_GOTO(linear_mesh(run, model, &lo, unlowered_min, prev_elements, &m->lin), done);
+    if (m->kept_ho) {
+      /* a remeshing, within the repairs' time: one gmsh cannot make (an
+       * error, a crash, no end in that time, faces lost) ends the
+       * remeshings, and the mesh kept so far is split */
+      model->mesher_deadline = run->deadline;
+      hoc_status made = linear_mesh(run, model, &lo, unlowered_min, prev_elements, &m->lin);
+      model->mesher_deadline = 0;
+      if (made == HOC_OK &&
+          hoc_mesh_num_failed_faces(m->lin) > hoc_mesh_num_failed_faces(m->kept_lin))
+        made = HOC_ERROR(HOC_ERR_MESH, "gmsh's mesher failed on %d face(s) more",
+                         hoc_mesh_num_failed_faces(m->lin) -
+                             hoc_mesh_num_failed_faces(m->kept_lin));
+      if (made == HOC_ERR_INTERRUPTED || made == HOC_ERR_MEMORY) {
+        status = made;
+        goto done;
+      }
+      if (made != HOC_OK) {
+        hoc_mesh_destroy(&m->lin);
+        HOC_TRY_GOTO(hoc_run_event(run, HOC_EVENT_NOTE,
+                                   "meshing the faces again failed (%s): splitting the mesh "
+                                   "after %d remeshing(s)",
+                                   hoc_last_error(), kept_r.remeshings),
+                     done);
+        int splits = r->refinements, remade = r->remeshings;
+        move_meshes(attempt, kept);
+        *r = kept_r;
+        r->refinements = splits;
+        r->remeshings = remade;
+        if (!hoc_run_late(run)) status = hoc_repair_refine_tangled(run, r, 2, &m->ho, NULL, 0);
+        *final = m->ho;
+        break;
+      }
+    } else {
+      HOC_TRY_GOTO(linear_mesh(run, model, &lo, unlowered_min, prev_elements, &m->lin), done);
+    }
     double t_lin = hoc_now() - t0;
     HOC_TRY_GOTO(warn_failed_faces(run, m->lin), done);
     HOC_TRY_GOTO(note_collapsed(run, m->lin), done);
