@@ -191,12 +191,11 @@ static void test_mesher_timeout(void) {
   hoc_model_destroy(&model);
 }
 
-/* A meshing with a deadline (a remeshing among the repairs, whose time
- * is counted): the fin's face that never ends stops the meshing at the
- * deadline, with no face probed (that would take the time again per
- * face) nor remembered as failed (a face that does not finish in what is
- * left of a budget is no face gmsh cannot mesh). A deadline passed fails
- * at once. */
+/* A meshing with a deadline (a remeshing, whose time is bounded): the
+ * fin's face that never ends stops the meshing at the deadline, with no
+ * face probed (that would take the time again per face) nor remembered
+ * as failed (a face that does not finish in what is left of a budget is
+ * no face gmsh cannot mesh). A deadline passed fails at once. */
 static void test_mesher_deadline(void) {
   hoc_model *model = NULL;
   CHECK_OK(hoc_model_open(DATA "wing_rounded_te.brep", &model));
@@ -213,7 +212,7 @@ static void test_mesher_deadline(void) {
     printf("wing, deadline %s: %.2f s, \"%s\"\n", passed ? "passed" : "in 2 s", took,
            hoc_last_error());
     CHECK(!m && took < (passed ? 0.5 : 3.5));
-    CHECK(strstr(hoc_last_error(), passed ? "no time left" : "left to the repairs") != NULL);
+    CHECK(strstr(hoc_last_error(), passed ? "no time left" : "left to a remeshing") != NULL);
     CHECK(model->mesher_failed == NULL);
     CHECK(no_children());
   }

@@ -624,15 +624,14 @@ static hoc_status generate_once(hoc_model *model, const hoc_linear_options *opti
   double timeout = o.mesher_timeout < 0 ? 0 : o.mesher_timeout > 0 ? o.mesher_timeout
                                                                    : HOC_MESHER_TIMEOUT;
   if (grading && budget > 0 && (timeout <= 0 || budget < timeout)) timeout = budget;
-  int by_deadline = 0; /* the time left to the model's mesher deadline is the limit */
-  if (model->mesher_deadline > 0) {
+  /* under the model's mesher deadline (a remeshing's), a time-out fails
+   * the meshing: no face is probed or remembered */
+  int by_deadline = model->mesher_deadline > 0;
+  if (by_deadline) {
     double left = model->mesher_deadline - hoc_now();
-    HOC_CHECK(left > 0, HOC_ERR_MESH, "no time left for gmsh's mesher (the repairs' time is "
+    HOC_CHECK(left > 0, HOC_ERR_MESH, "no time left for gmsh's mesher (a remeshing's time is "
                                       "spent)");
-    if (timeout <= 0 || left < timeout) {
-      timeout = left;
-      by_deadline = 1;
-    }
+    if (timeout <= 0 || left < timeout) timeout = left;
   }
   unsigned char *skip = NULL;
   int n_skipped = 0;
@@ -644,8 +643,8 @@ static hoc_status generate_once(hoc_model *model, const hoc_linear_options *opti
   run_outcome run = run_mesher(model, algorithm, timeout, skip, NULL, NULL, &p, &err, &end);
   if (grading && run == RUN_CRASHED && timed_out) *timed_out = end.signal == FACE_TIMED_OUT;
   if (by_deadline && run == RUN_CRASHED && end.signal == FACE_TIMED_OUT) {
-    status = HOC_ERROR(HOC_ERR_MESH, "gmsh's mesher did not finish in the %.3g s left to the "
-                                     "repairs (--repair-time)",
+    status = HOC_ERROR(HOC_ERR_MESH, "gmsh's mesher did not finish in the %.3g s left to a "
+                                     "remeshing",
                        timeout);
     goto done;
   }

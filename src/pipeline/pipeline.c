@@ -509,14 +509,16 @@ static hoc_status mesh_model_run(hoc_run *run, hoc_model *model, model_meshes *m
    * the linear mesh before that remeshing */
   double unlowered_min = lo.size_min;
   size_t prev_elements = 0;
+  double first_lin = 0; /* the first linear mesh's time */
   for (;;) {
     lo.face_size = face_size;
     double t0 = hoc_now();
     if (m->kept_ho) {
-      /* a remeshing, within the repairs' time: one gmsh cannot make (an
-       * error, a crash, no end in that time, faces lost) ends the
-       * remeshings, and the mesh kept so far is split */
-      model->mesher_deadline = run->deadline;
+      /* a remeshing, in a time of its own and within the repairs': one
+       * gmsh cannot make (an error, a crash, no end in that time, faces
+       * lost) ends the remeshings, and the mesh kept so far is split */
+      double end = t0 + HOC_PIPELINE_REMESH_GROWTH * first_lin + HOC_PIPELINE_REMESH_SECONDS;
+      model->mesher_deadline = run->deadline > 0 ? fmin(end, run->deadline) : end;
       hoc_status made = linear_mesh(run, model, &lo, unlowered_min, prev_elements, &m->lin);
       model->mesher_deadline = 0;
       if (made == HOC_OK &&
@@ -548,6 +550,7 @@ static hoc_status mesh_model_run(hoc_run *run, hoc_model *model, model_meshes *m
       HOC_TRY_GOTO(linear_mesh(run, model, &lo, unlowered_min, prev_elements, &m->lin), done);
     }
     double t_lin = hoc_now() - t0;
+    if (!m->kept_ho) first_lin = t_lin;
     HOC_TRY_GOTO(warn_failed_faces(run, m->lin), done);
     HOC_TRY_GOTO(note_collapsed(run, m->lin), done);
     HOC_TRY_GOTO(note_small_faces(run, m->lin), done);

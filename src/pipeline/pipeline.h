@@ -41,6 +41,13 @@
 #define HOC_PIPELINE_REMESH_EDGE 0.5
 #define HOC_PIPELINE_REMESH_MIN_SIZE 10
 #define HOC_PIPELINE_REMESH_GROWTH 4
+/* A remeshing's linear mesh (gmsh's meshings, the grading, the other
+ * algorithms' trials) may take HOC_PIPELINE_REMESH_GROWTH times the first
+ * linear mesh's time plus this many seconds, within the repairs' time:
+ * gmsh's MeshAdapt can go on without end on a face at finer sizes
+ * (surf114.igs at order 10: over 300 s on a remeshing whose first linear
+ * mesh took 12 s). */
+#define HOC_PIPELINE_REMESH_SECONDS 10.0
 /* Elements below this fraction of the linear mesh's min q are poor: an
  * untangled result has them optimised once more ("smoothed"), and those at
  * a CAD cusp (two curves meeting under HOC_PIPELINE_CUSP_DEGREES) are
