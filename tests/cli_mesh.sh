@@ -95,10 +95,10 @@ ok "refinements said and counted (${n_ref:-none}, ${n_rem:-none} remeshings)" "[
 ok "splits tried before remeshing" "grep -q 'splitting the tangled elements first' referr.txt && grep -q 'meshing the faces again instead' referr.txt"
 ok "one report, of the last attempt" "[ \$(grep -c '^linear ' ref.txt) -eq 1 ] && [ \$(grep -c '\"name\": \"linear\"' ref.json) -eq 1 ]"
 # splits that leave tangled elements, a remeshing, then splits that leave
-# none (the bottle at --size 40 --curvature 4, 20 sweeps: the elements left
+# none (the bottle at --size 40 --curvature 4, 10 sweeps: the elements left
 # tangled are on the faces at the thread's end, whose normal turns over
 # next to it)
-"$hocad" mesh "$bottle" --order 3 --size 40 --curvature 4 --max-iterations 20 --no-grading --no-output \
+"$hocad" mesh "$bottle" --order 3 --size 40 --curvature 4 --max-iterations 10 --no-grading --no-output \
   --json spent.json > /dev/null 2> spenterr.txt
 code=$?
 ok "the split stage reports no optimisation" "grep -q '\"name\": \"split\"' spent.json && ! grep -q '\"name\": \"split\"[^}]*iterations' spent.json"
@@ -117,10 +117,9 @@ ok "the last linear mesh is finer ($lin_first -> $lin_last)" "[ '$lin_last' -gt 
 # thread's face tangled. The optimiser leaves some tangled with the input's
 # elements (exit 5 without splitting); with two splits per chain allowed
 # it splits them and their neighbours red-green (optimising the new
-# elements and two rings around them), then at their longest edges, then
-# the red-green result again, which leaves none tangled by the exact test:
-# the splits are made, counted and reported, and the file says what the
-# report says.
+# elements and two rings around them), and at their longest edges if
+# that leaves some, until none is tangled by the exact test: the splits
+# are made, counted and reported, and the file says what the report says.
 if "$build/gmsh_ho_mesh" "$bottle" 3 g48.msh 2> /dev/null; then
   "$hocad" optimize "$bottle" g48.msh -o g48_kept.msh --refinements 0 -q --json g0.json \
     > /dev/null 2> g0.txt
@@ -130,7 +129,7 @@ if "$build/gmsh_ho_mesh" "$bottle" 3 g48.msh 2> /dev/null; then
     2> g1err.txt
   code=$?
   n_split=$(grep -o '"refinements": [0-9]*' g1.json | cut -d' ' -f2)
-  ok "splits said and counted (${n_split:-none})" "[ -n '$n_split' ] && [ '$n_split' -ge 2 ] && [ \$(grep -c 'splitting them' g1err.txt) -eq '$n_split' ]"
+  ok "splits said and counted (${n_split:-none})" "[ -n '$n_split' ] && [ '$n_split' -ge 1 ] && [ \$(grep -c 'splitting them' g1err.txt) -eq '$n_split' ]"
   ok "order 3: red-green splits optimised locally" "[ \$(grep -c 'red-green .* optimising the new elements and two rings around them again' g1err.txt) -ge 1 ] && [ \$(grep -c 'red-green' g1err.txt) -eq \$(grep -c 'red-green .* optimising the new elements and two rings around them again' g1err.txt) ]"
   t_out=$(grep -o '"name": "optimized"[^}]*' g1.json | grep -o '"tangled": [0-9]*' | cut -d' ' -f2)
   e_out=$(grep -o '"name": "optimized"[^}]*' g1.json | grep -o '"elements": [0-9]*' | cut -d' ' -f2)

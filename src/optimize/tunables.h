@@ -149,6 +149,11 @@
  * on such meshes), so their exact tests cost little. */
 #define HOC_OPT_FRAGILE_Q 0.1
 
+/* A curve node's step may not make its line's parameter turn back
+ * (line_turns_back in trial.c): the Bernstein coefficients of dt/ds and
+ * halvings down to 2^-LINE_DEPTH of the line decide. */
+#define HOC_OPT_LINE_DEPTH 10
+
 /* Steps ------------------------------------------------------------------ */
 
 /* A block's step moves no node further than this share of its local length
