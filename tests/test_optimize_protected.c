@@ -7,18 +7,16 @@
  *
  * The cases: a 12 x 6 grid of a torus (radii 2 and 0.5) raised to
  * order 3, every face node moved at random by up to 0.45 of a cell in u
- * and v (fixed seeds). The first run alone (hoc_opt_run) leaves elements
+ * and v (a fixed seed). The first run alone (hoc_opt_run) leaves elements
  * tangled; hoc_mesh_optimize keeps the protected run, which leaves none.
  * Without the protected run hoc_mesh_optimize returns the first run's
  * mesh, and with a second run that is not protected it returns the same
- * count: either way the checks below fail. The seeds were found by a
+ * count: either way the checks below fail. The seed was found by a
  * search over small analytic meshes (plane, sphere, cylinder, torus; grids
- * 6 x 4 to 16 x 6; orders 2-5; moves of 0.4-0.55 of a cell; a few hundred
+ * 6 x 4 to 16 x 6; orders 2-5; moves of 0.4-0.55 of a cell; about 100
  * seeds each) for cases where the first run leaves elements tangled and
- * the protected run fewer: these were the ones found. (The plane's cases
- * found so went when curve nodes could no longer make their line's
- * parameter turn back: their first runs untangle them.) A change to the
- * optimiser's rules may make the first run untangle them too; then this
+ * the protected run fewer: this was the one found. A change to the
+ * optimiser's rules may make the first run untangle it too; then this
  * test fails and needs a case found the same way.
  * SPDX-License-Identifier: GPL-2.0-or-later */
 #include "mesh/mesh.h"
