@@ -215,25 +215,6 @@ hoc_status hoc_opt_eval_trials(hoc_opt *o, const size_t *list, size_t n, int nth
   return hoc_par_error_raise(&err);
 }
 
-/* 1 if the polynomial of degree n with Bernstein coefficients c[0..n] on
- * [0, 1] is <= 0 somewhere: an end value (c[0], c[n]) <= 0 in a piece of
- * de Casteljau halvings, at most `depth` deep; 0 if every piece is proven
- * positive (all coefficients > 0) or nothing <= 0 is found. */
-static int bernstein_1d_negative(const double *c, int n, int depth) {
-  if (!(c[0] > 0) || !(c[n] > 0)) return 1;
-  int positive = 1;
-  for (int i = 1; i < n; ++i) positive &= c[i] > 0;
-  if (positive || depth == 0) return 0;
-  double left[HOC_MAX_ORDER + 1], right[HOC_MAX_ORDER + 1], w[HOC_MAX_ORDER + 1];
-  memcpy(w, c, (size_t)(n + 1) * sizeof *w);
-  for (int r = 0; r <= n; ++r) { /* de Casteljau at 1/2 */
-    left[r] = w[0];
-    right[n - r] = w[n - r];
-    for (int i = 0; i < n - r; ++i) w[i] = 0.5 * (w[i] + w[i + 1]);
-  }
-  return bernstein_1d_negative(left, n, depth - 1) || bernstein_1d_negative(right, n, depth - 1);
-}
-
 /* Curve parameters t[0..p] of line l's nodes in order along the line
  * (trial values for moving nodes if `trial`), unwrapped from its first
  * end: 1 if strictly monotone in the line's direction *dir. */
@@ -262,8 +243,8 @@ static int line_params(const hoc_opt *o, size_t l, int trial, double *t, double 
 }
 
 /* 1 if dt/ds, the derivative along the line of its nodes' parameters
- * t[0..p] interpolated at the set's edge nodes, is clearly negative or
- * zero somewhere on it (times dir): its Bernstein coefficients, and
+ * t[0..p] interpolated at the set's edge nodes, is negative somewhere
+ * on it (times dir): its Bernstein coefficients, and
  * halvings down to 2^-HOC_OPT_LINE_DEPTH of the line where they do not
  * decide. Ordered nodes do not make an increasing t: a node bunched
  * against its neighbour makes the polynomial turn back between them,
@@ -278,7 +259,8 @@ static int line_turns_back(const hoc_opt *o, const double *t, double dir) {
     for (int j = 0; j <= p; ++j) b[i] += o->t->Cn[i * (p + 1) + j] * t[j];
   }
   for (int i = 0; i < p; ++i) d[i] = dir * (b[i + 1] - b[i]);
-  return bernstein_1d_negative(d, p - 1, HOC_OPT_LINE_DEPTH);
+  double where;
+  return hoc_bernstein_negative(d, p - 1, 0, HOC_OPT_LINE_DEPTH, 0, 1, &where);
 }
 
 /* 1 if line l's nodes (trial values for moving nodes) are strictly

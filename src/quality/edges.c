@@ -145,12 +145,8 @@ done:
   return status;
 }
 
-/* 1 if the polynomial with Bernstein coefficients c[0..d] is below -tol
- * at an end of some piece of a subdivision into halves down to `depth`
- * more levels; 0 once every piece has all coefficients > 0 or nothing is
- * found. */
-static int negative_somewhere(const double *c, int d, double tol, int depth, double a, double b,
-                              double *where) {
+int hoc_bernstein_negative(const double *c, int d, double tol, int depth, double a, double b,
+                           double *where) {
   if (c[0] < -tol || c[d] < -tol) {
     *where = c[0] < -tol ? a : b; /* end coefficients are the values there */
     return 1;
@@ -170,8 +166,8 @@ static int negative_somewhere(const double *c, int d, double tol, int depth, dou
     right[d - r] = w[d - r];
   }
   double mid = 0.5 * (a + b);
-  return negative_somewhere(left, d, tol, depth - 1, a, mid, where) ||
-         negative_somewhere(right, d, tol, depth - 1, mid, b, where);
+  return hoc_bernstein_negative(left, d, tol, depth - 1, a, mid, where) ||
+         hoc_bernstein_negative(right, d, tol, depth - 1, mid, b, where);
 }
 
 int hoc_element_edges_folded(const hoc_quality_tables *t, const double *x, const double *n) {
@@ -233,7 +229,7 @@ int hoc_element_edges_fold_point(const hoc_quality_tables *t, const double *x, c
     for (int l = 0; l <= d && !degenerate; ++l)
       degenerate = !isfinite(c[l]);
     double where = 0.5;
-    if (degenerate || negative_somewhere(c, d, 1e-10 * scale, MAX_DEPTH, 0, 1, &where)) {
+    if (degenerate || hoc_bernstein_negative(c, d, 1e-10 * scale, MAX_DEPTH, 0, 1, &where)) {
       hoc_quality_edge_point(k, where, rs);
       return 1;
     }

@@ -212,6 +212,13 @@ int hoc_element_tangled(const hoc_quality_tables *t, const double *x, const doub
  *  "Tangled elements: samples, then exact tests". */
 int hoc_element_edges_folded(const hoc_quality_tables *t, const double *x, const double *n);
 
+/** 1 if the polynomial on [a, b] with Bernstein coefficients c[0..d]
+ *  (d <= 3 HOC_MAX_ORDER - 2) is below -tol at an end of some piece of a
+ *  subdivision into halves down to `depth` more levels (*where: that end);
+ *  0 once every piece has all coefficients > 0 or nothing is found. */
+int hoc_bernstein_negative(const double *c, int d, double tol, int depth, double a, double b,
+                           double *where);
+
 /** Reference coordinates rs[2] of the point at s of edge k (corner k at
  *  s = 0, corner k + 1 at s = 1). */
 void hoc_quality_edge_point(int k, double s, double *rs);
