@@ -243,12 +243,12 @@ static int line_params(const hoc_opt *o, size_t l, int trial, double *t, double 
 }
 
 /* 1 if dt/ds, the derivative along the line of its nodes' parameters
- * t[0..p] interpolated at the set's edge nodes, is negative somewhere
- * on it (times dir): its Bernstein coefficients, and
- * halvings down to 2^-HOC_OPT_LINE_DEPTH of the line where they do not
- * decide. Ordered nodes do not make an increasing t: a node bunched
- * against its neighbour makes the polynomial turn back between them,
- * the line's map to the curve folds there, and every element on the line
+ * t[0..p] interpolated at the set's edge nodes, is negative somewhere on
+ * it (times dir): its Bernstein coefficients, and halvings down to
+ * 2^-HOC_OPT_LINE_DEPTH of the line where they do not decide. Ordered
+ * nodes do not make an increasing t: a node bunched against its
+ * neighbour makes the polynomial turn back between them, the line's map
+ * to the curve folds there, and every element on the line
  * folds along its edge where no sample of the element lies. */
 static int line_turns_back(const hoc_opt *o, const double *t, double dir) {
   int p = o->m->order;

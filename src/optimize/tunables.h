@@ -151,7 +151,12 @@
 
 /* A curve node's step may not make its line's parameter turn back
  * (line_turns_back in trial.c): the Bernstein coefficients of dt/ds and
- * halvings down to 2^-LINE_DEPTH of the line decide. */
+ * halvings down to 2^-LINE_DEPTH of the line decide. Its class: curve
+ * nodes that slide until two bunch up (towards a cusp, beside a short
+ * neighbour) fold every element on their line between its samples, where
+ * only the exact phase sees it (crescent_plate at order 3: 8 such folds
+ * and 143 sweeps without the rule, 1 and 49 with it). Test:
+ * tests/test_optimize_line_monotone.c. */
 #define HOC_OPT_LINE_DEPTH 10
 
 /* Steps ------------------------------------------------------------------ */
