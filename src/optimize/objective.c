@@ -235,8 +235,10 @@ hoc_status hoc_opt_sweep_start(hoc_opt *o, double *objective, double *min_q, siz
   int np = o->np, nq = o->nq;
   double *fe = o->el.fe, *qe = o->el.qe;
   int failed = 0;
+  size_t n_dirty = 0, n_changed = 0;
+  for (size_t e = 0; e < ne; ++e) n_dirty += o->el.dirty[e];
   /* elements whose nodes moved: q, validity, their own regularisation */
-#pragma omp parallel
+#pragma omp parallel if (hoc_opt_parallel(o, n_dirty))
   {
     double *x = malloc((6 * (size_t)np + (size_t)nq + 2 * (size_t)np) * sizeof *x);
     if (!x) {
@@ -288,8 +290,10 @@ hoc_status hoc_opt_sweep_start(hoc_opt *o, double *objective, double *min_q, siz
       }
     }
   }
+  for (size_t e = 0; e < ne; ++e)
+    n_changed += o->el.dirty[e] || o->el.region[e] || o->el.was_region[e];
   /* objective parts that changed: moved, or in or out of the region */
-#pragma omp parallel
+#pragma omp parallel if (hoc_opt_parallel(o, n_changed))
   {
     double *x =
         malloc((6 * (size_t)np + (size_t)nq + (size_t)np + (size_t)o->t->nv + 1) * sizeof *x);

@@ -48,6 +48,7 @@
 #define HOC_OPTIMIZE_IMPL_H
 
 #include "mesh/mesh.h"
+#include "optimize/tunables.h"
 #include "quality/quality.h"
 
 #include <math.h>
@@ -311,6 +312,13 @@ static inline size_t hoc_opt_carry_begin(const hoc_opt_blockset *B, size_t b) {
 }
 static inline size_t hoc_opt_carry_end(const hoc_opt_blockset *B, size_t b) {
   return B->carry_start ? B->carry_start[b + 1] : 0;
+}
+
+/* Whether a loop over n blocks or elements of o is worth a team of
+ * threads (tunables.h, HOC_OPT_PARALLEL_WORK). */
+static inline int hoc_opt_parallel(const hoc_opt *o, size_t n) {
+  return n > HOC_OPT_PARALLEL_CHUNK &&
+         (double)n * (double)o->np * (double)o->nq >= HOC_OPT_PARALLEL_WORK;
 }
 
 /* Block b's (of o->B) place in the trial's per-block arrays, and its step. */

@@ -246,7 +246,8 @@ static hoc_status line_search(hoc_opt *o, size_t *list, size_t nt, size_t n_eval
         o->trial.alpha[hoc_opt_tb(o, b)] *= HOC_OPT_BACKTRACK;
     }
     HOC_TRY_GOTO(hoc_opt_eval_trials(o, elist, ne_list, nthreads), end);
-#pragma omp parallel for schedule(dynamic, 8) num_threads(nthreads)
+#pragma omp parallel for schedule(dynamic, HOC_OPT_PARALLEL_CHUNK) num_threads(nthreads)          \
+    if (hoc_opt_parallel(o, nt))
     for (size_t a = 0; a < nt; ++a) {
       size_t b = list[a], tb = hoc_opt_tb(o, b);
       hoc_opt_scratch *s = &scr[omp_get_thread_num()];
@@ -305,7 +306,8 @@ hoc_status hoc_opt_do_color(hoc_opt *o, int color, hoc_opt_scratch *scr, int nth
   *moved = 0;
   if (!n) return HOC_OK;
   size_t *list = o->trial.list;
-#pragma omp parallel for schedule(dynamic, 8) num_threads(nthreads)
+#pragma omp parallel for schedule(dynamic, HOC_OPT_PARALLEL_CHUNK) num_threads(nthreads)          \
+    if (hoc_opt_parallel(o, n))
   for (size_t a = 0; a < n; ++a) {
     size_t b = list[a];
     hoc_opt_scratch *s = &scr[omp_get_thread_num()];
@@ -362,7 +364,8 @@ hoc_status hoc_opt_do_color(hoc_opt *o, int color, hoc_opt_scratch *scr, int nth
   }
   if (status != HOC_OK) return status;
     /* validity may have been gained where blocks moved */
-#pragma omp parallel for schedule(dynamic, 8) num_threads(nthreads)
+#pragma omp parallel for schedule(dynamic, HOC_OPT_PARALLEL_CHUNK) num_threads(nthreads)          \
+    if (hoc_opt_parallel(o, n_committed))
   for (size_t a = 0; a < n_committed; ++a) {
     size_t b = o->trial.committed[a];
     hoc_opt_scratch *s = &scr[omp_get_thread_num()];

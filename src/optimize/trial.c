@@ -209,7 +209,7 @@ hoc_status hoc_opt_eval_trial(hoc_opt *o, size_t i) {
 hoc_status hoc_opt_eval_trials(hoc_opt *o, const size_t *list, size_t n, int nthreads) {
   hoc_par_error err = {0};
 #pragma omp parallel for schedule(dynamic, 4)                                                      \
-    num_threads(nthreads) if (n > 8 && o->model->thread_safe)
+    num_threads(nthreads) if (hoc_opt_parallel(o, n) && o->model->thread_safe)
   for (size_t c = 0; c < n; ++c)
     hoc_par_error_catch(&err, hoc_opt_eval_trial(o, list[c]));
   return hoc_par_error_raise(&err);

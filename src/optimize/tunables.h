@@ -206,6 +206,23 @@
  * elements at order 3: 462 MB without, 1 156 MB with). */
 #define HOC_OPT_FRAME_MIN_ORDER 6
 
+/* Threads ---------------------------------------------------------------- */
+
+/* A loop of a sweep over n blocks or elements runs on a team of threads
+ * only if n * np * nq (nodes times quadrature points of an element: its
+ * evaluation's cost) reaches PARALLEL_WORK, and n exceeds PARALLEL_CHUNK,
+ * the blocks a thread takes at a time (fewer give one thread all of
+ * them). Waking a team costs tens of microseconds under
+ * OMP_WAIT_POLICY=passive, an order-3 block a few: the late sweeps of
+ * small meshes (a few dozen blocks per colour, 2 families of up to 20
+ * colours) spent more on waking than on work (crescent_plate at order 3
+ * on 2 threads: 0.71 s, 0.34 s on 1, 0.32 s with this rule). The
+ * threshold is about 100 blocks at order 3, the chunk's 9 at order 10;
+ * large meshes keep their speed (bench/measure_rate). The result does not
+ * depend on it: the blocks of a colour share no element. */
+#define HOC_OPT_PARALLEL_WORK 50000.0
+#define HOC_OPT_PARALLEL_CHUNK 8
+
 /* Nodes whose trial state a colour's line search holds at once: a colour
  * of large blocks (the interiors of every element) holds most nodes of
  * the mesh (nist_ftc_07 at order 10: 4 million, 560 MB of trial state).
