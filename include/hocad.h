@@ -149,7 +149,7 @@ void hoc_linear_options_default(hoc_linear_options *options);
 
 /** The edge lengths the linear mesher uses for these options on this model:
  *  size_max, or the bounding-box diagonal / 20 if 0; size_min, or a tenth
- *  of that if 0. */
+ *  of that if 0 (options NULL: both 0). */
 void hoc_linear_sizes(const hoc_model *model, const hoc_linear_options *options, double *size_max,
                       double *size_min);
 

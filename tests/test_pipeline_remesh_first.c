@@ -2,14 +2,15 @@
  * not fold have their faces meshed again before any split.
  *
  * tests/data/wing_root_face.brep is one B-spline face of an aircraft wing
- * at its root (face 3 of wing_fuselage.step). Meshed at the whole model's
- * sizes (edges 45.94, minimum 4.594) it has 128 triangles; at order 8 its
- * order-3 optimum is valid, and raised to order 8 one element folds that
- * the order-8 optimisation leaves folded: the surface bends more within
- * it than order 8 follows. With the rule, its face is meshed again first
- * (the curvature sizing goes finer) and that mesh untangles; without it, a
- * split of the element comes first. (gmsh's mesh, not graded: graded down
- * to the face's narrow end, its 146 triangles untangle at order 8.)
+ * at its root (face 3 of wing_fuselage.step). Meshed at 1.4 times the
+ * whole model's sizes (edges 64.316, minimum 6.4316; gmsh's mesh, not
+ * graded) its order-3 optimum is valid, and raised to order 8 elements
+ * fold that the order-8 optimisation leaves folded (2 after the polish):
+ * the surface bends more within them than order 8 follows. With the rule,
+ * its face is meshed again first (the curvature sizing goes finer) and
+ * that mesh untangles; without it, a split of the elements comes first.
+ * (At the model's own sizes, 45.94 and 4.594, this face untangles at
+ * order 8 with no repair.)
  * SPDX-License-Identifier: GPL-2.0-or-later */
 #include "hocad.h"
 #include "test_util.h"
@@ -42,8 +43,8 @@ int main(void) {
   hoc_mesh_options o;
   hoc_mesh_options_default(&o);
   o.order = 8;
-  o.size = 45.94;
-  o.size_min = 4.594;
+  o.size = 64.316;
+  o.size_min = 6.4316;
   o.grading = 0;
   o.event = on_event;
   o.event_user = &s;

@@ -357,11 +357,14 @@ fail:
 
 /* Parameters of every slot on its face (of the nodes flagged in which, if
  * not NULL: their pole flags are left, and *pole_moved set where one would
- * change); checked against the node position: a slot farther than `tol`
- * moves to the face's nearest point, one farther than `refuse` fails
- * (given meshes). */
-static hoc_status slot_params(hoc_mesh *m, const hoc_mesh_source *src, double tol,
-                              double refuse, const unsigned char *which, int *pole_moved) {
+ * change): a curve node's is the face's pcurve at its parameter, a
+ * vertex's the face's own point of it, the face's nearest point only where
+ * those give none or leave the face's bounds. One rule for every mesh,
+ * hocad's own and read from a file alike, so that a mesh measures the same
+ * read back (tests/test_mesh_slots_read_back.c). Checked against the node
+ * position: a slot farther than `refuse` fails (given meshes). */
+static hoc_status slot_params(hoc_mesh *m, const hoc_mesh_source *src, double refuse,
+                              const unsigned char *which, int *pole_moved) {
   const hoc_model *model = m->model;
   /* group the curve slots by (curve, face) for batched reparametrisation */
   size_t n = m->n_slots;
@@ -464,16 +467,15 @@ static hoc_status slot_params(hoc_mesh *m, const hoc_mesh_source *src, double to
       HOC_TRY_GOTO(hoc_cad_face_eval(model, f, 1, p, x, NULL, NULL), done);
       d = hoc_dist3(x, m->xyz + 3 * i);
     }
-    if (d > tol) {
-      if (!(isfinite(p[0]) && isfinite(p[1])))
-        HOC_TRY_GOTO(model->ops->face_project(model->ctx, &model->faces[f], 1, m->xyz + 3 * i, p),
-                     done);
+    if (!(isfinite(p[0]) && isfinite(p[1]))) {
+      HOC_TRY_GOTO(model->ops->face_project(model->ctx, &model->faces[f], 1, m->xyz + 3 * i, p),
+                   done);
       HOC_TRY_GOTO(hoc_cad_face_invert(model, f, m->xyz + 3 * i, p, &d), done);
     }
     /* a curve and the faces it bounds agree only to the model's tolerance
      * (up to 3e-3 of its size in the corpus, 2e-2 seen in an IGES model):
-     * the node stays on its curve, the slot is the nearest point of the
-     * face, and the distance is recorded; a given mesh's curve or vertex
+     * the node stays on its curve, the slot is the pcurve's point, and
+     * the distance is recorded; a given mesh's curve or vertex
      * node may lie off the face by twice its given limit (that far off
      * its curve, the curve as far off the face) */
     if (d > m->face_gap) m->face_gap = d;
@@ -794,7 +796,7 @@ hoc_status hoc_mesh_move_nodes(hoc_mesh *m, const unsigned char *which, int *at_
   hoc_mesh_source none = {0};
   *at_pole = 0;
   HOC_TRY(hoc_mesh_update_xyz_of(m, which));
-  HOC_TRY(slot_params(m, &none, INFINITY, INFINITY, which, at_pole));
+  HOC_TRY(slot_params(m, &none, INFINITY, which, at_pole));
   hoc_mesh_element_params(m);
   hoc_mesh_per_element_pole_params(m);
   return HOC_OK;
@@ -883,7 +885,7 @@ static hoc_status assemble(hoc_model *model, const hoc_mesh_source *src, double 
   }
   if (given && src->keep_xyz) memcpy(m->xyz, given, 3 * src->n_nodes * sizeof *given);
   HOC_TRY_GOTO(build_slots(m), fail);
-  HOC_TRY_GOTO(slot_params(m, src, tol, src->given ? 2 * limit : INFINITY, NULL, NULL), fail);
+  HOC_TRY_GOTO(slot_params(m, src, src->given ? 2 * limit : INFINITY, NULL, NULL), fail);
   HOC_TRY_GOTO(hoc_mesh_split_pole_slots(m), fail);
   hoc_mesh_element_params(m);
   hoc_mesh_per_element_pole_params(m);

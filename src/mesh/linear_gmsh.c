@@ -25,8 +25,8 @@ void hoc_linear_options_default(hoc_linear_options *o) {
 
 void hoc_linear_sizes(const hoc_model *model, const hoc_linear_options *o, double *size_max,
                       double *size_min) {
-  *size_max = o->size_max > 0 ? o->size_max : model->diagonal / 20;
-  *size_min = o->size_min > 0 ? o->size_min : *size_max / 10;
+  *size_max = o && o->size_max > 0 ? o->size_max : model->diagonal / 20;
+  *size_min = o && o->size_min > 0 ? o->size_min : *size_max / 10;
 }
 
 /* Default elements per 2 pi of curvature radius: enough that the linear

@@ -161,11 +161,11 @@ double hoc_mesh_collapse_distance(const hoc_model *model);
  *  them (slots), unwrap each element's parameters across seams, give pole
  *  nodes a usable parameter and a slot per element, orient the faces from the
  *  elements, and recompute every node position from its parameters.
- *  `tolerance` (relative to the model's diagonal): nodes without
- *  parameters are located within it; a curve or vertex node whose
- *  parameters on a face (its curve on that face) put it farther than this
- *  from its position moves to the nearest point of the face, and the
- *  distance left is recorded (face_gap). A given mesh (src->given) fails
+ *  A curve or vertex node's place on a face is its curve's on that face
+ *  (the pcurve at its parameter; the face's nearest point only where that
+ *  gives none or leaves the face's bounds), for every mesh alike, and its
+ *  distance from the node is recorded (face_gap). `tolerance` (relative
+ *  to the model's diagonal) bounds given meshes only: one (src->given) fails
  *  with HOC_ERR_MISMATCH when a node lies farther from the model than
  *  hoc_mesh_given_limit allows, or a high-order node inside a face farther
  *  than the larger of `tolerance` and that limit (such nodes are kept
@@ -175,8 +175,8 @@ hoc_status hoc_mesh_assemble(hoc_model *model, const hoc_mesh_source *src, doubl
                              hoc_mesh **mesh);
 /** After the parameters of the nodes flagged in which[n_nodes] changed:
  *  their positions, their slots' parameters on the faces around and every
- *  element's parameters made again, as hoc_mesh_assemble (tolerance
- *  INFINITY, hocad's own mesh) makes them; face_gap grows to cover the
+ *  element's parameters made again, as hoc_mesh_assemble (hocad's own
+ *  mesh) makes them; face_gap grows to cover the
  *  moved slots. Pole flags stay: *at_pole is set where a moved slot lands
  *  on a pole side (the mesh is then not the assembled one). */
 hoc_status hoc_mesh_move_nodes(hoc_mesh *m, const unsigned char *which, int *at_pole);

@@ -227,11 +227,48 @@ int hoc_opt_elem_residuals(const hoc_opt *o, size_t e, const double *x, const do
   return count + 1;
 }
 
+/* The normals of the curve and vertex slots of moved elements again, as
+ * measuring takes them (hoc_mesh_slot_normals): where a face turns over
+ * along its boundary within the model's tolerance, such a slot takes the
+ * normal past the turn, found toward its elements' middles, so it changes
+ * when they move though its node stays (docs/quality.md). The elements of
+ * a slot whose normal changed are measured again. */
+static hoc_status refresh_boundary_normals(hoc_opt *o) {
+  hoc_mesh *m = o->m;
+  size_t ne = m->n_elems, np = (size_t)o->np, n = 0;
+  unsigned char *which = hoc_calloc(m->n_slots + 1, 1);
+  HOC_CHECK(which, HOC_ERR_MEMORY, "out of memory");
+  for (size_t e = 0; e < ne; ++e)
+    for (size_t k = 0; k < np && o->el.dirty[e]; ++k) {
+      size_t sl = m->elem_slot[e * np + k];
+      if (m->dim[m->conn[e * np + k]] == HOC_ON_FACE || m->slot_pole[sl] || which[sl]) continue;
+      which[sl] = 1;
+      ++n;
+    }
+  double *old = n ? hoc_realloc(NULL, 3 * n, sizeof *old) : NULL;
+  hoc_status status = n && !old ? HOC_ERROR(HOC_ERR_MEMORY, "out of memory") : HOC_OK;
+  for (size_t sl = 0, j = 0; sl < m->n_slots && old; ++sl)
+    if (which[sl]) memcpy(old + 3 * j++, o->node.normal + 3 * sl, 3 * sizeof *old);
+  if (status == HOC_OK && n) status = hoc_mesh_slot_normals_of(m, which, o->node.normal);
+  for (size_t sl = 0, j = 0; sl < m->n_slots && old && status == HOC_OK; ++sl) {
+    if (!which[sl]) continue;
+    if (memcmp(old + 3 * j++, o->node.normal + 3 * sl, 3 * sizeof *old)) {
+      size_t i = m->slot_node[sl];
+      for (size_t a = o->adj.ne_start[i]; a < o->adj.ne_start[i + 1]; ++a)
+        o->el.dirty[o->adj.ne_elem[a]] = 1;
+    }
+  }
+  free(old);
+  free(which);
+  return status;
+}
+
 /* Per-element state at the start of a sweep: validity, parametric
  * validity, regularisation; also f, q and the tangled count. */
 hoc_status hoc_opt_sweep_start(hoc_opt *o, double *objective, double *min_q, size_t *tangled) {
   hoc_mesh *m = o->m;
   size_t ne = m->n_elems;
+  HOC_TRY(refresh_boundary_normals(o));
   int np = o->np, nq = o->nq;
   double *fe = o->el.fe, *qe = o->el.qe;
   int failed = 0;
