@@ -92,7 +92,7 @@ static void test_cone(void) {
                          .param = par, .dim = dim, .entity = ent, .n_elems = ne, .conn = conn,
                          .elem_face = face};
   hoc_mesh *lin = NULL, *ho = NULL;
-  CHECK_OK(hoc_mesh_assemble(model, &src, 1e-9, &lin));
+  CHECK_OK(hoc_mesh_assemble(model, &src, &lin));
   if (lin) {
     hoc_quality_stats st;
     CHECK_OK(hoc_mesh_measure(lin, HOC_MEASURE_SHAPE, NULL, NULL, &st));

@@ -370,7 +370,7 @@ static hoc_status assemble_moved(const hoc_mesh *m, size_t node, const double uv
   src.line_conn = m->line_conn;
   src.line_curve = m->line_curve;
   src.face_orient = m->face_orient;
-  hoc_status st = hoc_mesh_assemble(m->model, &src, INFINITY, out);
+  hoc_status st = hoc_mesh_assemble(m->model, &src, out);
   free(par);
   return st;
 }

@@ -125,7 +125,7 @@ static void test_slivers(void) {
   hoc_mesh_source src = linear_source(N, xyz, par, dim, ent, 10, conn, face);
   src.has_param = has;
   hoc_mesh *lin = NULL;
-  CHECK_OK(hoc_mesh_assemble(model, &src, 1e-9, &lin));
+  CHECK_OK(hoc_mesh_assemble(model, &src, &lin));
   if (!lin) goto done;
   hoc_quality_stats st0, st1;
   CHECK_OK(hoc_mesh_measure(lin, HOC_MEASURE_SHAPE, NULL, NULL, &st0));
@@ -206,12 +206,12 @@ static double min_q_at(const hoc_mesh *m, size_t at) {
 /* src assembled, its edges swapped if `swap` (*swaps), and the min q of
  * its elements at node `at` (min_q_at), straight (*q1) and raised to
  * order p (*qp). */
-static void swap_and_measure(hoc_model *model, const hoc_mesh_source *src, double tol, int swap,
-                             int p, size_t at, size_t *swaps, double *q1, double *qp) {
+static void swap_and_measure(hoc_model *model, const hoc_mesh_source *src, int swap, int p,
+                             size_t at, size_t *swaps, double *q1, double *qp) {
   hoc_mesh *lin = NULL, *ho = NULL;
   *q1 = *qp = -1;
   *swaps = SIZE_MAX;
-  CHECK_OK(hoc_mesh_assemble(model, src, tol, &lin));
+  CHECK_OK(hoc_mesh_assemble(model, src, &lin));
   if (!lin) return;
   *swaps = 0;
   if (swap) CHECK_OK(hoc_mesh_swap_edges(lin, swaps, NULL));
@@ -272,7 +272,7 @@ static void disk_fan(hoc_model *model, int ear, int swap, size_t *swapped, doubl
   src.n_lines = N_RIM;
   src.line_conn = lines;
   src.line_curve = line_curve;
-  swap_and_measure(model, &src, 1e-6, swap, 3, 0, swapped, min_q, min_q3);
+  swap_and_measure(model, &src, swap, 3, 0, swapped, min_q, min_q3);
 }
 
 static void test_ears(void) {
@@ -328,7 +328,7 @@ static void bend_pair(hoc_model *model, int swapped_pair, int swap, size_t *swap
   size_t pair[2][6] = {{A, B, C, B, A, D_}, {A, D_, C, D_, B, C}};
   int face[2] = {0, 0};
   hoc_mesh_source src = linear_source(N, xyz, par, dim, ent, 2, pair[swapped_pair], face);
-  swap_and_measure(model, &src, 1e-9, swap, 2, SIZE_MAX, swaps, q1, q2);
+  swap_and_measure(model, &src, swap, 2, SIZE_MAX, swaps, q1, q2);
   if (!swapped_pair && !swap) { /* the straight q in closed form */
     CHECK_NEAR(*q1, straight_q(xyz + 3 * A, xyz + 3 * B, xyz + 3 * C), 1e-9);
   }

@@ -129,7 +129,7 @@ static void check_optimum(void) {
   src.order = 1, src.n_nodes = 3, src.xyz = xyz, src.param = par, src.dim = dim, src.entity = ent;
   src.n_elems = 1, src.conn = conn, src.elem_face = face;
   hoc_mesh *lin, *m;
-  CHECK_OK(hoc_mesh_assemble(model, &src, 1e-9, &lin));
+  CHECK_OK(hoc_mesh_assemble(model, &src, &lin));
   CHECK_OK(hoc_mesh_elevate(lin, 3, HOC_NODES_EQUISPACED, &m));
   double *before = malloc(3 * m->n_nodes * sizeof *before);
   memcpy(before, m->xyz, 3 * m->n_nodes * sizeof *before);
@@ -363,7 +363,7 @@ static void check_fragile(void) {
   src.order = 1, src.n_nodes = 4, src.xyz = xyz, src.param = par, src.dim = dim, src.entity = ent;
   src.n_elems = 3, src.conn = conn, src.elem_face = face;
   hoc_mesh *lin = NULL;
-  CHECK_OK(hoc_mesh_assemble(model, &src, 1e-9, &lin));
+  CHECK_OK(hoc_mesh_assemble(model, &src, &lin));
   for (int p = 5; p <= 6 && lin; ++p) {
     hoc_mesh *m = NULL;
     CHECK_OK(hoc_mesh_elevate(lin, p, HOC_NODES_EQUISPACED, &m));

@@ -17,6 +17,11 @@
  * writer rounded to about 7 significant digits. */
 enum { GIVEN_TOLERANCES = 4 };
 static const double GIVEN_ROUNDING = 1e-6;
+/* A given mesh's high-order node inside a face may lie this share of the
+ * diagonal off the surface: gmsh leaves such a node where its own
+ * projection fails (seen at 7e-3 of the model's size); farther, the mesh
+ * is not on this model. */
+static const double GIVEN_FACE_NODE = 1e-2;
 
 hoc_status hoc_mesh_given_limit(hoc_model *model, double *limit) {
   HOC_CHECK(model && limit, HOC_ERR_ARGUMENT, "NULL argument");
@@ -773,11 +778,9 @@ done:
 
 /* Assembly --------------------------------------------------------------- */
 
-static hoc_status assemble(hoc_model *model, const hoc_mesh_source *src, double tolerance,
-                           hoc_mesh **out);
+static hoc_status assemble(hoc_model *model, const hoc_mesh_source *src, hoc_mesh **out);
 
-hoc_status hoc_mesh_assemble(hoc_model *model, const hoc_mesh_source *given, double tolerance,
-                             hoc_mesh **out) {
+hoc_status hoc_mesh_assemble(hoc_model *model, const hoc_mesh_source *given, hoc_mesh **out) {
   HOC_CHECK(out, HOC_ERR_ARGUMENT, "mesh output is NULL");
   *out = NULL;
   HOC_CHECK(model && given, HOC_ERR_ARGUMENT, "NULL model or mesh source");
@@ -785,7 +788,7 @@ hoc_status hoc_mesh_assemble(hoc_model *model, const hoc_mesh_source *given, dou
   hoc_mesh_source src = *given;
   hoc_mesh_collapse collapse;
   HOC_TRY(hoc_mesh_collapse_sides(model, &src, &collapse));
-  hoc_status status = assemble(model, &src, tolerance, out);
+  hoc_status status = assemble(model, &src, out);
   if (status == HOC_OK) (*out)->n_collapsed = collapse.n_dropped;
   hoc_mesh_collapse_free(&collapse);
   return status;
@@ -802,10 +805,9 @@ hoc_status hoc_mesh_move_nodes(hoc_mesh *m, const unsigned char *which, int *at_
   return HOC_OK;
 }
 
-static hoc_status assemble(hoc_model *model, const hoc_mesh_source *src, double tolerance,
-                           hoc_mesh **out) {
+static hoc_status assemble(hoc_model *model, const hoc_mesh_source *src, hoc_mesh **out) {
   HOC_CHECK(src->xyz || src->param, HOC_ERR_ARGUMENT, "nodes have neither positions nor parameters");
-  double tol = tolerance * model->diagonal;
+  double tol = GIVEN_FACE_NODE * model->diagonal;
   /* a given mesh: corners, curve and vertex nodes within `limit` of the
    * model; high-order nodes inside faces within the larger `tol` */
   double limit = INFINITY;

@@ -493,7 +493,7 @@ static hoc_status reinterpolate(const hoc_mesh *in, int p, hoc_nodeset set,
   src.line_conn = lconn;
   src.line_curve = lcurve;
   src.face_orient = in->face_orient; /* same faces, same elements: same orientation */
-  HOC_TRY_GOTO(hoc_mesh_assemble(in->model, &src, INFINITY, out), done);
+  HOC_TRY_GOTO(hoc_mesh_assemble(in->model, &src, out), done);
   status = hoc_mesh_copy_failed(in, *out);
   if (status != HOC_OK) hoc_mesh_destroy(out);
 done:

@@ -110,7 +110,7 @@ hoc_status hoc_mesh_grid_linear(hoc_model *model, int nu, int nv, hoc_mesh **mes
   src.n_elems = ne;
   src.conn = conn;
   src.elem_face = ef;
-  status = hoc_mesh_assemble(model, &src, 1e-9, mesh);
+  status = hoc_mesh_assemble(model, &src, mesh);
 done:
   free(id);
   free(xyz);

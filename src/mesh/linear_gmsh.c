@@ -720,7 +720,7 @@ static hoc_status generate_once(hoc_model *model, const hoc_linear_options *opti
   src.line_conn = p.lines;
   src.line_curve = p.line_curve;
   src.node_tag = p.g.tag;
-  HOC_TRY_GOTO(hoc_mesh_assemble(model, &src, 1e-6, mesh), done);
+  HOC_TRY_GOTO(hoc_mesh_assemble(model, &src, mesh), done);
   (*mesh)->n_failed_faces = p.n_failed;
   (*mesh)->failed_faces = p.failed;
   for (int f = 0; f < model->n_faces; ++f)

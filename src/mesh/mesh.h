@@ -164,15 +164,14 @@ double hoc_mesh_collapse_distance(const hoc_model *model);
  *  A curve or vertex node's place on a face is its curve's on that face
  *  (the pcurve at its parameter; the face's nearest point only where that
  *  gives none or leaves the face's bounds), for every mesh alike, and its
- *  distance from the node is recorded (face_gap). `tolerance` (relative
- *  to the model's diagonal) bounds given meshes only: one (src->given) fails
- *  with HOC_ERR_MISMATCH when a node lies farther from the model than
- *  hoc_mesh_given_limit allows, or a high-order node inside a face farther
- *  than the larger of `tolerance` and that limit (such nodes are kept
+ *  distance from the node is recorded (face_gap). A given mesh
+ *  (src->given) fails with HOC_ERR_MISMATCH when a node lies farther from
+ *  the model than hoc_mesh_given_limit allows, or a high-order node inside
+ *  a face farther than the larger of 1% of the diagonal and that limit
+ *  (such nodes are kept
  *  where the file puts them: gmsh leaves them off the surface where its
  *  projection fails). hocad's own meshes are never refused. */
-hoc_status hoc_mesh_assemble(hoc_model *model, const hoc_mesh_source *src, double tolerance,
-                             hoc_mesh **mesh);
+hoc_status hoc_mesh_assemble(hoc_model *model, const hoc_mesh_source *src, hoc_mesh **mesh);
 /** After the parameters of the nodes flagged in which[n_nodes] changed:
  *  their positions, their slots' parameters on the faces around and every
  *  element's parameters made again, as hoc_mesh_assemble (hocad's own

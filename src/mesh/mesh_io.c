@@ -302,14 +302,13 @@ hoc_status hoc_mesh_read_msh(hoc_model *model, const char *path, hoc_mesh **mesh
   src.line_conn = lconn;
   src.line_curve = lcurve;
   src.node_tag = raw.node_tag;
-  /* measured as written: gmsh leaves a high-order node inside a face off
-   * the surface where its own projection fails (seen at 7e-3 of the
-   * model's size); farther than 1% of the model's size, the mesh is not on
-   * this model. Every other node lies on the model within its tolerance
-   * (hoc_mesh_given_limit). */
+  /* measured as written, and within hoc_mesh_assemble's bounds for a
+   * given mesh (hoc_mesh_given_limit; 1% of the model's size for a
+   * high-order node inside a face, which gmsh leaves off the surface where
+   * its own projection fails) */
   src.keep_xyz = 1;
   src.given = 1;
-  status = hoc_mesh_assemble(model, &src, 1e-2, mesh);
+  status = hoc_mesh_assemble(model, &src, mesh);
 done:
   free(dim);
   free(ent);

@@ -537,7 +537,7 @@ static hoc_status cutter_assemble(cutter *C, hoc_mesh **out) {
   src.line_conn = C->line;
   src.line_curve = C->line_curve;
   src.face_orient = m->face_orient;
-  HOC_TRY_GOTO(hoc_mesh_assemble(m->model, &src, INFINITY, out), done);
+  HOC_TRY_GOTO(hoc_mesh_assemble(m->model, &src, out), done);
   status = hoc_mesh_copy_record(m, *out);
   if (status != HOC_OK) hoc_mesh_destroy(out);
 done:

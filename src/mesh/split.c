@@ -449,7 +449,7 @@ hoc_status hoc_mesh_split(const hoc_mesh *mesh, const unsigned char *elements, h
   src.line_conn = lconn;
   src.line_curve = lcurve;
   src.face_orient = m->face_orient;
-  status = hoc_mesh_assemble(m->model, &src, INFINITY, out);
+  status = hoc_mesh_assemble(m->model, &src, out);
   if (status == HOC_OK) status = hoc_mesh_copy_failed(m, *out);
   if (status != HOC_OK) hoc_mesh_destroy(out);
 done:
